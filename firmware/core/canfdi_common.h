@@ -1,0 +1,36 @@
+/*
+ * canfdi_common.h — what every canfdi module shares: fixed-width types,
+ * error codes, the invariant assertion and the configuration.
+ *
+ * Error convention (as in libcanard): a function that can fail returns a
+ * negated CANFDI_E* code (so < 0), and >= 0 on success. A function that
+ * cannot fail "by contract" says so and returns void or a value.
+ */
+#ifndef CANFDI_COMMON_H
+#define CANFDI_COMMON_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "canfdi_config.h"
+
+#define CANFDI_OK 0
+#define CANFDI_EINVAL 2 /* an argument is out of its documented domain */
+#define CANFDI_ERANGE 3 /* a value does not fit its representation */
+#define CANFDI_ENODATA 4 /* no valid data (yet) */
+
+/*
+ * Invariant check. Internal invariants only; never used to validate inputs
+ * (inputs get an error code). Defaults to nothing on targets; the host tests
+ * define it to assert(). Override by defining CANFDI_ASSERT before inclusion
+ * or in CANFDI_CONFIG_HEADER.
+ */
+#ifndef CANFDI_ASSERT
+#define CANFDI_ASSERT(x) ((void)0)
+#endif
+
+/* Compile-time assertion usable in C99. */
+#define CANFDI_STATIC_ASSERT(cond, msg) typedef char canfdi_static_assert_##msg[(cond) ? 1 : -1]
+
+#endif /* CANFDI_COMMON_H */
