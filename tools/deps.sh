@@ -46,7 +46,7 @@ if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
   [ -x "$VENV/bin/python" ] || "$PY" -m venv "$VENV"
   "$VENV/bin/pip" install -q --disable-pip-version-check -r requirements.txt </dev/null
   if [ -f tools/pyproject.toml ]; then
-    "$VENV/bin/pip" install -q --disable-pip-version-check --no-deps -e tools </dev/null
+    "$VENV/bin/pip" install -q --disable-pip-version-check --no-deps --no-build-isolation -e tools </dev/null
   fi
   echo "$want" > "$stamp"
 else
