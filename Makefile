@@ -32,12 +32,14 @@ TEST_STEPS :=
 ALL_STEPS :=
 BENCH_STEPS :=
 
--include $(sort $(wildcard mk/*.mk)) $(wildcard dbc/dbc.mk host_sim/host_sim.mk bench/bench.mk)
+-include $(sort $(wildcard mk/*.mk)) $(wildcard dbc/dbc.mk host_sim/host_sim.mk bench/bench.mk tests/ref/ref.mk)
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/unit/%)
 
 .PHONY: all deps test unit demo firmware bench clean help
+# Keep object files of test programs between runs.
+.SECONDARY:
 
 help:
 	@echo "canfdi make targets:"
