@@ -62,7 +62,7 @@ $(BUILD)/host/%.o: %.c
 
 $(BUILD)/unit/%.o: tests/unit/%.c
 	@mkdir -p $(@D)
-	$(CC) $(HOST_CFLAGS) -Itests/unit $(shell pkg-config --cflags check 2>/dev/null) -MMD -MP -c $< -o $@
+	$(CC) $(HOST_CFLAGS) -Itests/unit -Ihost_sim $(shell pkg-config --cflags check 2>/dev/null) -MMD -MP -c $< -o $@
 
 $(BUILD)/unit/%: $(BUILD)/unit/%.o $(FW_HOST_OBJ) $(UNIT_EXTRA_OBJ)
 	$(CC) $(SAN) -o $@ $^ $(CHECK_LIBS) -lm

@@ -20,4 +20,11 @@
 #define CANFDI_CFG_STEP_US 1000U
 #endif
 
+/* Largest number of parameters of one estimator. RAM cost per RLS instance
+ * ~ 4 n^2 + 60 n + 80 bytes (432 bytes at 6; see model/canfdi_rls.h); 5 covers the
+ * throttle's mechanical equation, 6 leaves one spare. */
+#ifndef CANFDI_CFG_RLS_MAX_PARAMS
+#define CANFDI_CFG_RLS_MAX_PARAMS 6U
+#endif
+
 #endif /* CANFDI_CONFIG_H */

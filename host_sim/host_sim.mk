@@ -19,7 +19,6 @@ SIM_E2E_SRC := firmware/comm/canfdi_e2e.c
 UNIT_EXTRA_OBJ += $(SIM_LIB_OBJ)
 
 # The plant tests include the library headers by name.
-$(BUILD)/unit/test_sim_%.o: HOST_CFLAGS += -Ihost_sim
 # getopt_long/clock_gettime: the pre-included assert.h fixes feature macros
 # before the file can define them, so define them here.
 $(BUILD)/host/$(SIM_MAIN_SRC:.c=.o): HOST_CFLAGS += -D_GNU_SOURCE

@@ -30,7 +30,8 @@
 #define CANFDI_ASSERT(x) ((void)0)
 #endif
 
-/* Compile-time assertion usable in C99. */
+/* Compile-time assertion usable in C99, at file scope only (at block scope
+ * the typedef trips -Wunused-local-typedefs). */
 #define CANFDI_STATIC_ASSERT(cond, msg) typedef char canfdi_static_assert_##msg[(cond) ? 1 : -1]
 
 #endif /* CANFDI_COMMON_H */

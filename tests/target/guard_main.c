@@ -28,6 +28,9 @@
 #include "detect/canfdi_trend.h"
 #include "diag/canfdi_debounce.h"
 #include "model/canfdi_svf.h"
+#include "model/canfdi_rls.h"
+#include "model/canfdi_est_dcm.h"
+#include "model/canfdi_est_thr.h"
 
 /* Inputs the compiler cannot know. */
 static volatile int16_t in_s16[2];
@@ -285,6 +288,93 @@ static void guard_svf(void)
   sinku64((uint64_t)d->steps + d->resets + d->out_saturations);
 }
 
+static void guard_rls(void)
+{
+  static canfdi_rls_t rls;
+  canfdi_rls_cfg_t cfg = {0};
+  int32_t phi[CANFDI_CFG_RLS_MAX_PARAMS];
+  const canfdi_rls_diag_t *d;
+  canfdi_rls_xf_t x;
+
+  cfg.n_params = (uint8_t)in_n;
+  cfg.forget_q31 = in_s32[0];
+  cfg.p0_q16 = in_s32[1];
+  cfg.trace_max_q16 = in_s32[2];
+  for (unsigned i = 0U; i < CANFDI_CFG_RLS_MAX_PARAMS; i++)
+  {
+    phi[i] = in_s32[i % 3U];
+  }
+  sink32(canfdi_rls_init(&rls, &cfg));
+  canfdi_rls_reset(&rls, in_n != 0U);
+  sink32(canfdi_rls_update(&rls, phi, in_s32[0]) ? 1 : 0);
+  canfdi_rls_set_theta_qn(&rls, in_n, in_s32[1], 16U);
+  sink32(canfdi_rls_theta_qn(&rls, in_n, 16U));
+  sink32(canfdi_rls_err_q16(&rls));
+  sink32(canfdi_rls_cov_qn(&rls, in_n, in_n, 16U));
+  sink32(canfdi_rls_trace_q16(&rls));
+  x = canfdi_rls_d(&rls, in_n);
+  sink32(x.m + x.e);
+  sink32(canfdi_rls_excitation_q16(&rls));
+  sink32(canfdi_rls_excited(&rls) ? 1 : 0);
+  sink32(canfdi_rls_invariants_hold(&rls) ? 1 : 0);
+  d = canfdi_rls_diag(&rls);
+  sinku64((uint64_t)d->updates + d->skipped + d->trace_clips + d->resets + d->saturations);
+}
+
+static void guard_est_dcm(void)
+{
+  static canfdi_est_dcm_t est;
+  static canfdi_est_dcm_cfg_t cfg;
+  const canfdi_est_dcm_diag_t *d;
+
+  canfdi_est_dcm_default_cfg(&cfg);
+  sink32(canfdi_est_dcm_init(&est, &cfg));
+  canfdi_est_dcm_reset(&est, in_n != 0U);
+  canfdi_est_dcm_step(&est, in_s32[0], in_s32[1], in_s32[2]);
+  sink32(canfdi_est_dcm_ra_q16(&est));
+  sink32(canfdi_est_dcm_la_q24(&est));
+  sink32(canfdi_est_dcm_psi_q16(&est));
+  sink32(canfdi_est_dcm_j_q24(&est));
+  sink32(canfdi_est_dcm_mf1_q24(&est));
+  sink32(canfdi_est_dcm_mc_q16(&est));
+  sink32(canfdi_est_dcm_excited(&est) ? 1 : 0);
+  sink32(canfdi_est_dcm_arm_converged(&est) ? 1 : 0);
+  sink32(canfdi_est_dcm_mech_converged(&est) ? 1 : 0);
+  sink32(canfdi_rls_trace_q16(canfdi_est_dcm_arm_rls(&est)));
+  sink32(canfdi_rls_trace_q16(canfdi_est_dcm_mech_rls(&est)));
+  d = canfdi_est_dcm_diag(&est);
+  sinku64((uint64_t)d->steps + d->arm_updates + d->mech_updates + d->resets);
+}
+
+static void guard_est_thr(void)
+{
+  static canfdi_est_thr_t est;
+  static canfdi_est_thr_cfg_t cfg;
+  const canfdi_est_thr_diag_t *d;
+
+  canfdi_est_thr_default_cfg(&cfg);
+  sink32(canfdi_est_thr_init(&est, &cfg));
+  canfdi_est_thr_reset(&est, in_n != 0U);
+  canfdi_est_thr_step(&est, in_s32[0], in_s32[1], in_s32[2]);
+  sink32(canfdi_est_thr_r_q16(&est));
+  sink32(canfdi_est_thr_l_q24(&est));
+  sink32(canfdi_est_thr_k_q16(&est));
+  sink32(canfdi_est_thr_u0_q16(&est));
+  sink32(canfdi_est_thr_j_q24(&est));
+  sink32(canfdi_est_thr_b_q24(&est));
+  sink32(canfdi_est_thr_spring_q24(&est));
+  sink32(canfdi_est_thr_pretension_q16(&est));
+  sink32(canfdi_est_thr_friction_q16(&est));
+  sink32(canfdi_est_thr_excited(&est) ? 1 : 0);
+  sink32(canfdi_est_thr_el_converged(&est) ? 1 : 0);
+  sink32(canfdi_est_thr_mech_converged(&est) ? 1 : 0);
+  sink32(canfdi_rls_trace_q16(canfdi_est_thr_el_rls(&est)));
+  sink32(canfdi_rls_trace_q16(canfdi_est_thr_mech_rls(&est)));
+  d = canfdi_est_thr_diag(&est);
+  sinku64((uint64_t)d->steps + d->el_updates + d->mech_updates + d->mech_lh_skips +
+          d->mech_still_skips + d->clip_skips + d->resets);
+}
+
 int main(void)
 {
   guard_fixp();
@@ -296,6 +386,9 @@ int main(void)
   guard_adapt();
   guard_e2e();
   guard_svf();
+  guard_rls();
+  guard_est_dcm();
+  guard_est_thr();
   guard_generated();
   return 0;
 }

@@ -1,0 +1,221 @@
+/*
+ * canfdi_est_dcm.c — DC motor parameter estimator; see canfdi_est_dcm.h.
+ */
+#include "model/canfdi_est_dcm.h"
+
+#include "core/canfdi_fixp.h"
+
+#define ONE_Q16 65536
+
+/* T / 2 in Q31 (the half-sample correction of the ZOH voltage) */
+#define HALF_T_Q31 CANFDI_Q31_RATIO(CANFDI_CFG_STEP_US, 2000000)
+
+void canfdi_est_dcm_default_cfg(canfdi_est_dcm_cfg_t *cfg)
+{
+  CANFDI_ASSERT(cfg != NULL);
+  cfg->svf.order = 2U;
+  cfg->svf.omega_c_rad_s = 200;
+  cfg->decim = 5U;
+  cfg->forget_q31 = CANFDI_Q31_RATIO(1, 100);
+  cfg->p0_q16 = 100 * ONE_Q16;
+  cfg->trace_max_q16 = 1000 * ONE_Q16;
+  cfg->excite_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 1000, 16);
+  cfg->excite_shift = 6U;
+  cfg->conv_updates = 400U;
+  cfg->ra_nom_q16 = (int32_t)CANFDI_QN_RATIO_(152, 100, 16);
+  cfg->la_nom_q24 = (int32_t)CANFDI_QN_RATIO_(682, 100000, 24);
+  cfg->psi_nom_q16 = (int32_t)CANFDI_QN_RATIO_(33, 100, 16);
+  cfg->j_nom_q24 = (int32_t)CANFDI_QN_RATIO_(192, 100000, 24);
+  cfg->mf1_nom_q24 = (int32_t)CANFDI_QN_RATIO_(36, 100000, 24);
+  cfg->mc_nom_q16 = (int32_t)CANFDI_QN_RATIO_(131, 100, 16);
+}
+
+static void rls_cfg_common(canfdi_rls_cfg_t *rc, const canfdi_est_dcm_cfg_t *cfg)
+{
+  unsigned i;
+  rc->n_params = 3U;
+  rc->forget_q31 = cfg->forget_q31;
+  rc->p0_q16 = cfg->p0_q16;
+  rc->trace_max_q16 = cfg->trace_max_q16;
+  rc->excite_min_q16 = cfg->excite_min_q16;
+  rc->excite_shift = cfg->excite_shift;
+  rc->excite_mask = 0U;
+  for (i = 0U; i < CANFDI_CFG_RLS_MAX_PARAMS; i++) {
+    rc->phi_shift[i] = 0;
+    rc->theta0_q16[i] = 0;
+  }
+}
+
+/* Seeds both estimators with the nominal parameters at full resolution. */
+static void seed_nominal(canfdi_est_dcm_t *e)
+{
+  const canfdi_est_dcm_cfg_t *c = &e->cfg;
+  canfdi_rls_set_theta_qn(&e->arm, 0U, c->ra_nom_q16, 16U);
+  canfdi_rls_set_theta_qn(&e->arm, 1U, c->la_nom_q24, 24U);
+  canfdi_rls_set_theta_qn(&e->arm, 2U, c->psi_nom_q16, 16U);
+  /* J / Psi etc.: Q24 / Q16 * 2^16 -> Q24 */
+  canfdi_rls_set_theta_qn(&e->mech, 0U, canfdi_div_s32_qn(c->j_nom_q24, c->psi_nom_q16, 16U), 24U);
+  canfdi_rls_set_theta_qn(&e->mech, 1U, canfdi_div_s32_qn(c->mf1_nom_q24, c->psi_nom_q16, 16U), 24U);
+  canfdi_rls_set_theta_qn(&e->mech, 2U, canfdi_div_s32_qn(c->mc_nom_q16, c->psi_nom_q16, 16U), 16U);
+}
+
+int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg)
+{
+  int32_t out = -CANFDI_EINVAL;
+  if ((e != NULL) && (cfg != NULL) && (cfg->decim >= 1U) && (cfg->decim <= 100U) &&
+      (cfg->psi_nom_q16 > 0)) {
+    canfdi_rls_cfg_t ra;
+    canfdi_rls_cfg_t rm;
+    rls_cfg_common(&ra, cfg);
+    ra.y_shift = CANFDI_EST_DCM_SHIFT_U;
+    ra.phi_shift[0] = CANFDI_EST_DCM_SHIFT_I;
+    ra.phi_shift[1] = CANFDI_EST_DCM_SHIFT_DI;
+    ra.phi_shift[2] = CANFDI_EST_DCM_SHIFT_W;
+    ra.excite_mask = 0x5U; /* I_A and w must both vary (dI/dt follows I_A) */
+    rls_cfg_common(&rm, cfg);
+    rm.y_shift = CANFDI_EST_DCM_SHIFT_I;
+    rm.phi_shift[0] = CANFDI_EST_DCM_SHIFT_DW;
+    rm.phi_shift[1] = CANFDI_EST_DCM_SHIFT_W;
+    rm.phi_shift[2] = 0;
+    rm.excite_mask = 0x3U; /* dw/dt and w; not the constant */
+    if ((canfdi_svf_init(&e->svf_u, &cfg->svf) == CANFDI_OK) &&
+        (canfdi_svf_init(&e->svf_i, &cfg->svf) == CANFDI_OK) &&
+        (canfdi_svf_init(&e->svf_w, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->arm, &ra) == CANFDI_OK) &&
+        (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
+      e->cfg = *cfg;
+      e->diag.steps = 0U;
+      e->diag.arm_updates = 0U;
+      e->diag.mech_updates = 0U;
+      e->diag.resets = 0U;
+      canfdi_est_dcm_reset(e, false);
+      e->diag.resets = 0U;
+      out = CANFDI_OK;
+    }
+  }
+  return out;
+}
+
+void canfdi_est_dcm_reset(canfdi_est_dcm_t *e, bool keep_theta)
+{
+  CANFDI_ASSERT(e != NULL);
+  canfdi_rls_reset(&e->arm, keep_theta);
+  canfdi_rls_reset(&e->mech, keep_theta);
+  if (!keep_theta) {
+    seed_nominal(e);
+  }
+  e->phase = 0U;
+  e->started = false;
+  e->arm_since_reset = 0U;
+  e->mech_since_reset = 0U;
+  e->diag.resets += 1U;
+}
+
+void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, int32_t w_q16)
+{
+  CANFDI_ASSERT(e != NULL);
+  if (!e->started) {
+    canfdi_svf_reset(&e->svf_u, ua_q16);
+    canfdi_svf_reset(&e->svf_i, ia_q16);
+    canfdi_svf_reset(&e->svf_w, w_q16);
+    e->started = true;
+  } else {
+    canfdi_svf_step(&e->svf_u, ua_q16);
+    canfdi_svf_step(&e->svf_i, ia_q16);
+    canfdi_svf_step(&e->svf_w, w_q16);
+    e->phase = (uint8_t)(e->phase + 1U);
+    if (e->phase >= e->cfg.decim) {
+      e->phase = 0U;
+    }
+    if (e->phase == 0U) {
+      int32_t phi[3];
+      const int32_t y = canfdi_add_s32_sat(canfdi_svf_y_q16(&e->svf_u),
+                                           canfdi_mul_s32_qn(canfdi_svf_dy_q16(&e->svf_u), HALF_T_Q31, 31U));
+      phi[0] = canfdi_svf_y_q16(&e->svf_i);
+      phi[1] = canfdi_svf_dy_q16(&e->svf_i);
+      phi[2] = canfdi_svf_y_q16(&e->svf_w);
+      if (canfdi_rls_update(&e->arm, phi, y)) {
+        e->arm_since_reset += (e->arm_since_reset < UINT32_MAX) ? 1U : 0U;
+        e->diag.arm_updates += 1U;
+      }
+    }
+    /* the mechanical update one step later (same step when decim == 1) */
+    if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
+      int32_t phi[3];
+      phi[0] = canfdi_svf_dy_q16(&e->svf_w);
+      phi[1] = canfdi_svf_y_q16(&e->svf_w);
+      phi[2] = ONE_Q16;
+      if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
+        e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
+        e->diag.mech_updates += 1U;
+      }
+    }
+  }
+  e->diag.steps += 1U;
+}
+
+int32_t canfdi_est_dcm_ra_q16(const canfdi_est_dcm_t *e)
+{
+  return canfdi_rls_theta_qn(&e->arm, 0U, 16U);
+}
+
+int32_t canfdi_est_dcm_la_q24(const canfdi_est_dcm_t *e)
+{
+  return canfdi_rls_theta_qn(&e->arm, 1U, 24U);
+}
+
+int32_t canfdi_est_dcm_psi_q16(const canfdi_est_dcm_t *e)
+{
+  return canfdi_rls_theta_qn(&e->arm, 2U, 16U);
+}
+
+/* Psi for the mechanical conversion: the estimate once it has converged. */
+static int32_t psi_for_mech_q16(const canfdi_est_dcm_t *e)
+{
+  return canfdi_est_dcm_arm_converged(e) ? canfdi_est_dcm_psi_q16(e) : e->cfg.psi_nom_q16;
+}
+
+/* Scaling: Q16.16 Psi x Q24 ratio, rounded shift by 16 -> Q24, saturated. */
+int32_t canfdi_est_dcm_j_q24(const canfdi_est_dcm_t *e)
+{
+  return canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 0U, 24U), 16U);
+}
+
+int32_t canfdi_est_dcm_mf1_q24(const canfdi_est_dcm_t *e)
+{
+  return canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 1U, 24U), 16U);
+}
+
+int32_t canfdi_est_dcm_mc_q16(const canfdi_est_dcm_t *e)
+{
+  return canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 2U, 16U), 16U);
+}
+
+bool canfdi_est_dcm_excited(const canfdi_est_dcm_t *e)
+{
+  return canfdi_rls_excited(&e->arm);
+}
+
+bool canfdi_est_dcm_arm_converged(const canfdi_est_dcm_t *e)
+{
+  return e->arm_since_reset >= e->cfg.conv_updates;
+}
+
+bool canfdi_est_dcm_mech_converged(const canfdi_est_dcm_t *e)
+{
+  return e->mech_since_reset >= e->cfg.conv_updates;
+}
+
+const canfdi_rls_t *canfdi_est_dcm_arm_rls(const canfdi_est_dcm_t *e)
+{
+  return &e->arm;
+}
+
+const canfdi_rls_t *canfdi_est_dcm_mech_rls(const canfdi_est_dcm_t *e)
+{
+  return &e->mech;
+}
+
+const canfdi_est_dcm_diag_t *canfdi_est_dcm_diag(const canfdi_est_dcm_t *e)
+{
+  return &e->diag;
+}

@@ -1,0 +1,306 @@
+/*
+ * canfdi_est_thr.c — throttle parameter estimator; see canfdi_est_thr.h.
+ */
+#include "model/canfdi_est_thr.h"
+
+#include "core/canfdi_fixp.h"
+
+#define ONE_Q16 65536
+#define HALF_T_Q31 CANFDI_Q31_RATIO(CANFDI_CFG_STEP_US, 2000000)
+/* pi / 180 for the degree-valued defaults */
+#define DEG_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_((int64_t)(num) * 314159265, (int64_t)(den) * 18000000000LL, 16))
+
+void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
+{
+  CANFDI_ASSERT(cfg != NULL);
+  cfg->svf.order = 3U;
+  cfg->svf.omega_c_rad_s = 300;
+  cfg->decim = 2U;
+  cfg->forget_q31 = CANFDI_Q31_RATIO(5, 1000);
+  cfg->mech_forget_q31 = CANFDI_Q31_RATIO(5, 10000);
+  cfg->p0_q16 = 100 * ONE_Q16;
+  cfg->trace_max_q16 = 1000 * ONE_Q16;
+  cfg->excite_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 1000, 16);
+  cfg->excite_shift = 6U;
+  cfg->conv_updates = 1000U;
+  cfg->sign_band_q16 = (int32_t)CANFDI_QN_RATIO_(3, 10, 16);
+  cfg->limp_band_q16 = DEG_Q16(2, 1);
+  cfg->i_limit_q16 = (int32_t)CANFDI_QN_RATIO_(99, 10, 16);
+  cfg->holdoff_steps = 40U;
+  cfg->r_nom_q16 = (int32_t)CANFDI_QN_RATIO_(15, 10, 16);
+  cfg->l_nom_q24 = (int32_t)CANFDI_QN_RATIO_(15, 10000, 24);
+  cfg->k_nom_q16 = (int32_t)CANFDI_QN_RATIO_(383, 1000, 16);
+  cfg->u0_nom_q16 = 0;
+  cfg->j_nom_q24 = (int32_t)CANFDI_QN_RATIO_(21, 10000, 24);
+  cfg->b_nom_q24 = (int32_t)CANFDI_QN_RATIO_(88, 10000, 24);
+  cfg->spring_nom_q24 = (int32_t)CANFDI_QN_RATIO_(87, 1000, 24);
+  cfg->pretension_nom_q16 = (int32_t)CANFDI_QN_RATIO_(396, 1000, 16);
+  cfg->friction_nom_q16 = (int32_t)CANFDI_QN_RATIO_(284, 1000, 16);
+  cfg->limp_home_q16 = DEG_Q16(65, 10);
+}
+
+static void rls_cfg_common(canfdi_rls_cfg_t *rc, const canfdi_est_thr_cfg_t *cfg, uint8_t n)
+{
+  unsigned i;
+  rc->n_params = n;
+  rc->forget_q31 = cfg->forget_q31;
+  rc->p0_q16 = cfg->p0_q16;
+  rc->trace_max_q16 = cfg->trace_max_q16;
+  rc->excite_min_q16 = cfg->excite_min_q16;
+  rc->excite_shift = cfg->excite_shift;
+  rc->excite_mask = 0U;
+  for (i = 0U; i < CANFDI_CFG_RLS_MAX_PARAMS; i++) {
+    rc->phi_shift[i] = 0;
+    rc->theta0_q16[i] = 0;
+  }
+}
+
+static void seed_nominal(canfdi_est_thr_t *e)
+{
+  const canfdi_est_thr_cfg_t *c = &e->cfg;
+  /* (P - k_s theta_LH): Q24 x Q16 -> Q16 with a 24-bit rounding shift */
+  const int32_t p_eff_q16 =
+      canfdi_sub_s32_sat(c->pretension_nom_q16, canfdi_mul_s32_qn(c->spring_nom_q24, c->limp_home_q16, 24U));
+  canfdi_rls_set_theta_qn(&e->el, 0U, c->r_nom_q16, 16U);
+  canfdi_rls_set_theta_qn(&e->el, 1U, c->l_nom_q24, 24U);
+  canfdi_rls_set_theta_qn(&e->el, 2U, c->k_nom_q16, 16U);
+  canfdi_rls_set_theta_qn(&e->el, 3U, c->u0_nom_q16, 16U);
+  /* x / K: Q24 (or Q16) / Q16 * 2^16 keeps the numerator's format */
+  canfdi_rls_set_theta_qn(&e->mech, 0U, canfdi_div_s32_qn(c->j_nom_q24, c->k_nom_q16, 16U), 24U);
+  canfdi_rls_set_theta_qn(&e->mech, 1U, canfdi_div_s32_qn(c->b_nom_q24, c->k_nom_q16, 16U), 24U);
+  canfdi_rls_set_theta_qn(&e->mech, 2U, canfdi_div_s32_qn(c->spring_nom_q24, c->k_nom_q16, 16U), 24U);
+  canfdi_rls_set_theta_qn(&e->mech, 3U, canfdi_div_s32_qn(p_eff_q16, c->k_nom_q16, 16U), 16U);
+  canfdi_rls_set_theta_qn(&e->mech, 4U, canfdi_div_s32_qn(c->friction_nom_q16, c->k_nom_q16, 16U), 16U);
+}
+
+int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg)
+{
+  int32_t out = -CANFDI_EINVAL;
+  if ((e != NULL) && (cfg != NULL) && (cfg->svf.order == 3U) && (cfg->decim >= 1U) && (cfg->decim <= 100U) &&
+      (cfg->k_nom_q16 > 0) && (cfg->sign_band_q16 >= 0) && (cfg->limp_band_q16 >= 0) && (cfg->i_limit_q16 >= 0) &&
+      (cfg->holdoff_steps >= 1U) && (cfg->holdoff_steps <= 1000U)) {
+    canfdi_rls_cfg_t re;
+    canfdi_rls_cfg_t rm;
+    rls_cfg_common(&re, cfg, 4U);
+    re.y_shift = CANFDI_EST_THR_SHIFT_U;
+    re.phi_shift[0] = CANFDI_EST_THR_SHIFT_I;
+    re.phi_shift[1] = CANFDI_EST_THR_SHIFT_DI;
+    re.phi_shift[2] = CANFDI_EST_THR_SHIFT_DA;
+    re.phi_shift[3] = 0;
+    re.excite_mask = 0x5U; /* i and dtheta/dt must both vary */
+    rls_cfg_common(&rm, cfg, 5U);
+    rm.forget_q31 = cfg->mech_forget_q31;
+    rm.y_shift = CANFDI_EST_THR_SHIFT_I;
+    rm.phi_shift[0] = CANFDI_EST_THR_SHIFT_D2A;
+    rm.phi_shift[1] = CANFDI_EST_THR_SHIFT_DA;
+    rm.phi_shift[2] = CANFDI_EST_THR_SHIFT_A;
+    rm.phi_shift[3] = 0;
+    rm.phi_shift[4] = 0;
+    rm.excite_mask = 0x6U; /* dtheta/dt and theta: sustained motion */
+    if ((canfdi_svf_init(&e->svf_u, &cfg->svf) == CANFDI_OK) &&
+        (canfdi_svf_init(&e->svf_i, &cfg->svf) == CANFDI_OK) &&
+        (canfdi_svf_init(&e->svf_a, &cfg->svf) == CANFDI_OK) &&
+        (canfdi_svf_init(&e->svf_s, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->el, &re) == CANFDI_OK) &&
+        (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
+      e->cfg = *cfg;
+      e->diag.steps = 0U;
+      e->diag.el_updates = 0U;
+      e->diag.mech_updates = 0U;
+      e->diag.mech_lh_skips = 0U;
+      e->diag.mech_still_skips = 0U;
+      e->diag.clip_skips = 0U;
+      e->diag.resets = 0U;
+      canfdi_est_thr_reset(e, false);
+      e->diag.resets = 0U;
+      out = CANFDI_OK;
+    }
+  }
+  return out;
+}
+
+void canfdi_est_thr_reset(canfdi_est_thr_t *e, bool keep_theta)
+{
+  CANFDI_ASSERT(e != NULL);
+  canfdi_rls_reset(&e->el, keep_theta);
+  canfdi_rls_reset(&e->mech, keep_theta);
+  if (!keep_theta) {
+    seed_nominal(e);
+  }
+  e->phase = 0U;
+  e->started = false;
+  e->since_clip = 0U;
+  e->moving = 0U;
+  e->last_dir = 0;
+  e->el_since_reset = 0U;
+  e->mech_since_reset = 0U;
+  e->diag.resets += 1U;
+}
+
+void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16)
+{
+  CANFDI_ASSERT(e != NULL);
+  if (!e->started) {
+    canfdi_svf_reset(&e->svf_u, u_q16);
+    canfdi_svf_reset(&e->svf_i, i_q16);
+    canfdi_svf_reset(&e->svf_a, angle_q16);
+    canfdi_svf_reset(&e->svf_s, 0);
+    e->started = true;
+  } else {
+    /* friction sign from the velocity of the previous step */
+    const int32_t v = canfdi_svf_dy_q16(&e->svf_a);
+    int32_t s = 0;
+    if (v > e->cfg.sign_band_q16) {
+      s = ONE_Q16;
+    } else if (v < -e->cfg.sign_band_q16) {
+      s = -ONE_Q16;
+    } else {
+      /* inside the dead band: unknown, 0 */
+    }
+    {
+      const int8_t dir = (s > 0) ? (int8_t)1 : ((s < 0) ? (int8_t)-1 : (int8_t)0);
+      if ((dir == 0) || (dir != e->last_dir)) {
+        e->moving = 0U;
+      } else if (e->moving < UINT16_MAX) {
+        e->moving = (uint16_t)(e->moving + 1U);
+      } else {
+        /* saturated counter */
+      }
+      e->last_dir = dir;
+    }
+    if ((e->cfg.i_limit_q16 > 0) && ((i_q16 >= e->cfg.i_limit_q16) || (i_q16 <= -e->cfg.i_limit_q16))) {
+      e->since_clip = 0U;
+    } else if (e->since_clip < UINT16_MAX) {
+      e->since_clip = (uint16_t)(e->since_clip + 1U);
+    } else {
+      /* saturated counter */
+    }
+    canfdi_svf_step(&e->svf_u, u_q16);
+    canfdi_svf_step(&e->svf_i, i_q16);
+    canfdi_svf_step(&e->svf_a, angle_q16);
+    canfdi_svf_step(&e->svf_s, s);
+    e->phase = (uint8_t)(e->phase + 1U);
+    if (e->phase >= e->cfg.decim) {
+      e->phase = 0U;
+    }
+    if ((e->phase == 0U) && (e->since_clip < e->cfg.holdoff_steps)) {
+      e->diag.clip_skips += 1U;
+    } else if (e->phase == 0U) {
+      int32_t phi[4];
+      const int32_t y = canfdi_add_s32_sat(canfdi_svf_y_q16(&e->svf_u),
+                                           canfdi_mul_s32_qn(canfdi_svf_dy_q16(&e->svf_u), HALF_T_Q31, 31U));
+      phi[0] = canfdi_svf_y_q16(&e->svf_i);
+      phi[1] = canfdi_svf_dy_q16(&e->svf_i);
+      phi[2] = canfdi_svf_dy_q16(&e->svf_a);
+      phi[3] = ONE_Q16;
+      if (canfdi_rls_update(&e->el, phi, y)) {
+        e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
+        e->diag.el_updates += 1U;
+      }
+    }
+    if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
+      const int32_t a = canfdi_svf_y_q16(&e->svf_a);
+      if (e->since_clip < e->cfg.holdoff_steps) {
+        e->diag.clip_skips += 1U;
+      } else if (a <= canfdi_add_s32_sat(e->cfg.limp_home_q16, e->cfg.limp_band_q16)) {
+        e->diag.mech_lh_skips += 1U;
+      } else if (e->moving < e->cfg.holdoff_steps) {
+        e->diag.mech_still_skips += 1U;
+      } else {
+        int32_t phi[5];
+        phi[0] = canfdi_svf_d2y_q16(&e->svf_a);
+        phi[1] = canfdi_svf_dy_q16(&e->svf_a);
+        phi[2] = a;
+        phi[3] = ONE_Q16;
+        phi[4] = canfdi_svf_y_q16(&e->svf_s);
+        if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
+          e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
+          e->diag.mech_updates += 1U;
+        }
+      }
+    }
+  }
+  e->diag.steps += 1U;
+}
+
+int32_t canfdi_est_thr_r_q16(const canfdi_est_thr_t *e)
+{
+  return canfdi_rls_theta_qn(&e->el, 0U, 16U);
+}
+
+int32_t canfdi_est_thr_l_q24(const canfdi_est_thr_t *e)
+{
+  return canfdi_rls_theta_qn(&e->el, 1U, 24U);
+}
+
+int32_t canfdi_est_thr_k_q16(const canfdi_est_thr_t *e)
+{
+  return canfdi_rls_theta_qn(&e->el, 2U, 16U);
+}
+
+int32_t canfdi_est_thr_u0_q16(const canfdi_est_thr_t *e)
+{
+  return canfdi_rls_theta_qn(&e->el, 3U, 16U);
+}
+
+static int32_t k_for_mech_q16(const canfdi_est_thr_t *e)
+{
+  return canfdi_est_thr_el_converged(e) ? canfdi_est_thr_k_q16(e) : e->cfg.k_nom_q16;
+}
+
+/* Scaling: Q16.16 K x Q24 (or Q16) ratio, rounded shift by 16, saturated. */
+int32_t canfdi_est_thr_j_q24(const canfdi_est_thr_t *e)
+{
+  return canfdi_mul_s32_qn(k_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 0U, 24U), 16U);
+}
+
+int32_t canfdi_est_thr_b_q24(const canfdi_est_thr_t *e)
+{
+  return canfdi_mul_s32_qn(k_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 1U, 24U), 16U);
+}
+
+int32_t canfdi_est_thr_spring_q24(const canfdi_est_thr_t *e)
+{
+  return canfdi_mul_s32_qn(k_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 2U, 24U), 16U);
+}
+
+/* P = K th3 + k_s theta_LH (Q24 x Q16 -> Q16 with a 24-bit shift) */
+int32_t canfdi_est_thr_pretension_q16(const canfdi_est_thr_t *e)
+{
+  const int32_t p_eff = canfdi_mul_s32_qn(k_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 3U, 16U), 16U);
+  return canfdi_add_s32_sat(p_eff, canfdi_mul_s32_qn(canfdi_est_thr_spring_q24(e), e->cfg.limp_home_q16, 24U));
+}
+
+int32_t canfdi_est_thr_friction_q16(const canfdi_est_thr_t *e)
+{
+  return canfdi_mul_s32_qn(k_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 4U, 16U), 16U);
+}
+
+bool canfdi_est_thr_excited(const canfdi_est_thr_t *e)
+{
+  return canfdi_rls_excited(&e->el);
+}
+
+bool canfdi_est_thr_el_converged(const canfdi_est_thr_t *e)
+{
+  return e->el_since_reset >= e->cfg.conv_updates;
+}
+
+bool canfdi_est_thr_mech_converged(const canfdi_est_thr_t *e)
+{
+  return e->mech_since_reset >= e->cfg.conv_updates;
+}
+
+const canfdi_rls_t *canfdi_est_thr_el_rls(const canfdi_est_thr_t *e)
+{
+  return &e->el;
+}
+
+const canfdi_rls_t *canfdi_est_thr_mech_rls(const canfdi_est_thr_t *e)
+{
+  return &e->mech;
+}
+
+const canfdi_est_thr_diag_t *canfdi_est_thr_diag(const canfdi_est_thr_t *e)
+{
+  return &e->diag;
+}
