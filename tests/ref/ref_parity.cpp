@@ -3,9 +3,9 @@
 // host_sim traces as the fixed-point code; the differences are the cost of
 // the fixed-point arithmetic and are checked against the tolerances the
 // headers derive from their rounding analysis:
-//   DC motor r1..r4: |r_fix - r_ref| <= 64 LSB of Q16.16 (~1 mV, ~1 mN m);
-//                    R_A estimates within 1e-5 Ohm;
-//   throttle CORR <= 2 LSB, ARM <= 16 LSB, POS1/POS2 <= 16 LSB while the
+//   DC motor |r_fix - r_ref| <= 100 LSB of Q16.16 for r1, r4 (1.5 mV) and
+//                    24 LSB for r2, r3 (0.4 mN m); R_A within 0.1 mOhm;
+//   throttle CORR <= 2 LSB, ARM <= 24 LSB, POS1/POS2 <= 8 LSB while the
 //                    observer's discrete decisions coincide (stick/slide,
 //                    feedback source); steps where they differ are counted
 //                    and must stay below 0.1 % of the run.
@@ -178,7 +178,7 @@ struct PdcmRef {
 struct PthrRef {
   const canfdi_parity_thr_cfg_t *cfg;
   double z1, z2, slope, sum, vmin, vmax, imax, R, L, K, J, B, ks, P, Tc, lh, lhw, tmax;
-  double ke, stickw, restw, jump, ralpha, l1, l2;
+  double ke, stickw, restw, jump, ralpha, l1, l2, beta;
   ref::Svf su, si, sth;
   AdaptRef thr[4];
   bool primed = false, en_prev = false;
@@ -216,6 +216,9 @@ struct PthrRef {
     ralpha = kT / (static_cast<double>(c->res_tau_us) * 1e-6 + kT);
     l1 = 2.0 * c->obs_lambda_rad_s * kT;
     l2 = static_cast<double>(c->obs_lambda_rad_s) * c->obs_lambda_rad_s * kT;
+    // exact interval mean of a first-order R-L current (see the C code)
+    const double x = R * kT / L;
+    beta = 1.0 / (1.0 - std::exp(-x)) - 1.0 / x;
     for (int j = 0; j < 4; j++) thr[j].init(c->band[j]);
     settle = c->settle_steps;
     th_hat = lh;
@@ -295,7 +298,7 @@ struct PthrRef {
       sth.reset(th_mean);
       primed = true;
     }
-    const double i_avg = 0.5 * (I + i_prev), di = I - i_prev;
+    const double di = I - i_prev, i_avg = i_prev + beta * di;
     if (ok1 && ok2) corr_lp += ralpha * (corr_raw - corr_lp);
     const double corr = corr_lp;
     // theta_arm
@@ -320,6 +323,7 @@ struct PthrRef {
     const double th_arm_avg = 0.5 * (th_arm + th_arm_prev);
     // observer
     const double rate = sth.dy();
+    const bool emf_ok = en && !clip && std::fabs(i_prev) < imax;
     double thp, wp;
     {
       const double w0 = w_hat, d = th_hat - lh;
@@ -332,7 +336,7 @@ struct PthrRef {
         w = w0 + (kT / J) * (up ? drive - Tc : drive + Tc);
         if ((w0 > 0 && w < 0) || (w0 < 0 && w > 0)) w = 0;
       }
-      if (en && !clip && std::fabs(i_prev) < imax) {
+      if (emf_ok) {
         const double wel = (u - R * i_avg - (L / kT) * di) / K;
         w += ke * (wel - w);
       }
@@ -349,7 +353,7 @@ struct PthrRef {
       wp = w;
     }
     src = source(ok1, ok2, corr, rate);
-    if (src == CANFDI_PARITY_THR_SRC_NONE && (ok1 || ok2) && std::fabs(rate) > restw) thp = th_hat + inc;
+    if (src == CANFDI_PARITY_THR_SRC_NONE && (ok1 || ok2) && !emf_ok) thp = th_hat + inc;
     if (src != CANFDI_PARITY_THR_SRC_NONE) {
       const double y = (src == CANFDI_PARITY_THR_SRC_MEAN) ? th_mean : ((src == CANFDI_PARITY_THR_SRC_TPS1) ? th1 : th2);
       const double e = y - thp;
@@ -423,6 +427,9 @@ struct DcmRun {
   bool prbs;
 };
 
+// Worst-case rounding bounds of canfdi_parity_dcm.h (98, 19, 24, 98 LSB).
+constexpr double kDcmTol[4] = {100.0, 24.0, 24.0, 100.0};
+
 void run_dcm(ref::Tally &t, const DcmRun &run, canfdi_parity_dcm_cfg_t &cfg) {
   static canfdi_sim_t sim;
   static canfdi_parity_dcm_t fx;
@@ -475,7 +482,7 @@ void run_dcm(ref::Tally &t, const DcmRun &run, canfdi_parity_dcm_cfg_t &cfg) {
     rf.step(q16d(pin.u_V_q16), q16d(pin.i_A_q16), q16d(pin.w_rad_s_q16), q16d(pin.load_Nm_q16));
     if (o->valid != rf.valid) cmp.valid_mismatch++;
     for (int j = 0; j < 4; j++) {
-      if ((o->valid & rf.valid) & (1U << j)) cmp.add(j, q16d(o->r_q16[j]), rf.r[j], 64.0);
+      if ((o->valid & rf.valid) & (1U << j)) cmp.add(j, q16d(o->r_q16[j]), rf.r[j], kDcmTol[j]);
     }
     max_dra = std::max(max_dra, std::fabs(q24d(o->ra_hat_ohm_q24) - rf.ra));
   }
@@ -484,12 +491,12 @@ void run_dcm(ref::Tally &t, const DcmRun &run, canfdi_parity_dcm_cfg_t &cfg) {
               run.name, cmp.max_lsb[0], cmp.max_lsb[1], cmp.max_lsb[2], cmp.max_lsb[3], max_dra, rf.ra,
               sim.dcm.ra_ohm);
   for (int j = 0; j < 4; j++) {
-    t.check(cmp.n[j] > n / 2 && cmp.beyond[j] == 0, "dcm %s: r%d within 64 LSB (max %.1f LSB, %ld samples)",
-            run.name, j + 1, cmp.max_lsb[j], cmp.n[j]);
+    t.check(cmp.n[j] > n / 2 && cmp.beyond[j] == 0, "dcm %s: r%d within %.0f LSB (max %.1f LSB, %ld samples)",
+            run.name, j + 1, kDcmTol[j], cmp.max_lsb[j], cmp.n[j]);
   }
   t.check(cmp.valid_mismatch == 0, "dcm %s: validity flags identical (%ld mismatches)", run.name,
           cmp.valid_mismatch);
-  t.check(max_dra <= 1e-5, "dcm %s: R_A estimates within 1e-5 Ohm (%.2e)", run.name, max_dra);
+  t.check(max_dra <= 1e-4, "dcm %s: R_A estimates within 0.1 mOhm (%.2e Ohm)", run.name, max_dra);
 }
 
 // ---- throttle runs ----------------------------------------------------------------
@@ -537,7 +544,7 @@ void run_thr(ref::Tally &t, const ThrRun &run, const canfdi_parity_thr_cfg_t &cf
   }
   PthrRef rf(&cfg);
   Cmp cmp;
-  static const double tol[4] = {2.0, 16.0, 16.0, 16.0};
+  static const double tol[4] = {2.0, 24.0, 8.0, 8.0};
   long decision_diff = 0;
   double max_th = 0;
   const long n = std::lround(run.seconds / kT);
@@ -565,13 +572,13 @@ void run_thr(ref::Tally &t, const ThrRun &run, const canfdi_parity_thr_cfg_t &cf
   }
   const long beyond_pos = cmp.beyond[2] + cmp.beyond[3];
   std::printf("thr %-28s max |r_fix - r_ref| [LSB]: corr %.1f  arm %.1f  pos1 %.1f  pos2 %.1f; theta_hat %.1f LSB; "
-              "POS steps beyond 16 LSB %ld, source differs %ld of %ld steps\n",
+              "POS steps beyond 8 LSB %ld, source differs %ld of %ld steps\n",
               run.name, cmp.max_lsb[0], cmp.max_lsb[1], cmp.max_lsb[2], cmp.max_lsb[3], max_th, beyond_pos,
               decision_diff, n);
   t.check(cmp.n[0] > n / 2 && cmp.beyond[0] == 0, "thr %s: CORR within 2 LSB (max %.1f)", run.name, cmp.max_lsb[0]);
-  t.check(cmp.n[1] > n / 2 && cmp.beyond[1] == 0, "thr %s: ARM within 16 LSB (max %.1f)", run.name, cmp.max_lsb[1]);
+  t.check(cmp.n[1] > n / 2 && cmp.beyond[1] == 0, "thr %s: ARM within 24 LSB (max %.1f)", run.name, cmp.max_lsb[1]);
   t.check(cmp.n[2] > n / 2 && beyond_pos * 1000 <= 2 * n,
-          "thr %s: POS within 16 LSB except where a decision differs (%ld of %ld steps beyond)", run.name, beyond_pos,
+          "thr %s: POS within 8 LSB except where a decision differs (%ld of %ld steps beyond)", run.name, beyond_pos,
           2 * n);
   t.check(decision_diff * 1000 <= n, "thr %s: feedback source identical in >= 99.9 %% of steps (%ld differ)",
           run.name, decision_diff);
@@ -613,6 +620,7 @@ int main() {
       {"TPS1 +0.1 V abrupt, const", 13, 0, CANFDI_FAULT_THR_TPS1_DRIFT, 0.1, 0, 9.0},
       {"TPS2 -0.1 V in 3 s, sine", 14, 1, CANFDI_FAULT_THR_TPS2_DRIFT, -0.1, 3.0, 12.0},
       {"motor R +20 %, sine", 15, 1, CANFDI_FAULT_THR_MOTOR_R_UP, 0.2, 0, 9.0},
+      {"TPS1 -0.1 V in 3 s, steps", 16, 2, CANFDI_FAULT_THR_TPS1_DRIFT, -0.1, 3.0, 12.0},
   };
   for (const ThrRun &r : thr_runs) run_thr(t, r, tcfg);
   return t.finish();

@@ -1,0 +1,716 @@
+/*
+ * canfdi_parity_thr.c — throttle-valve residuals: TPS correlation, armature
+ * equation and model-versus-sensor position; see canfdi_parity_thr.h.
+ */
+#include "model/canfdi_parity_thr.h"
+
+#define PTHR_ONE_Q16 ((int32_t)65536)
+#define PTHR_Q24(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 24))
+#define PTHR_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 16))
+/* Bound on |omega_hat|: 2000 rad/s (Q32), far above any valve speed. */
+#define PTHR_W_MAX_Q32 ((int64_t)2000 << 32)
+/* theta_arm follows the TPS mean with 1/2^8 per step while they agree. */
+#define PTHR_LEAK_SHIFT 8U
+
+/* ------------------------------------------------------------------------ */
+/* Small helpers                                                            */
+/* ------------------------------------------------------------------------ */
+
+static bool pthr_in(int32_t x, int32_t lo, int32_t hi)
+{
+  return (x >= lo) && (x <= hi);
+}
+
+static int32_t pthr_abs(int32_t x)
+{
+  return canfdi_q31_abs(x);
+}
+
+/* Q32 (int64) -> Q16.16, rounded half up, saturated. */
+static int32_t pthr_q32_to_q16(int64_t x)
+{
+  return canfdi_sat_s64_to_s32(canfdi_asr64_rnd(x, 16U));
+}
+
+/* Q40 (int64) -> Q24 (int32), rounded half up, saturated. */
+static int32_t pthr_q40_to_q24(int64_t x)
+{
+  return canfdi_sat_s64_to_s32(canfdi_asr64_rnd(x, 16U));
+}
+
+/* Median of three (exact, no arithmetic). */
+static int64_t pthr_median3_64(int64_t a, int64_t b, int64_t c)
+{
+  int64_t lo = (a < b) ? a : b;
+  int64_t hi = (a < b) ? b : a;
+  int64_t m = c;
+  if (c < lo) {
+    m = lo;
+  } else if (c > hi) {
+    m = hi;
+  } else {
+    /* c between a and b */
+  }
+  return m;
+}
+
+/*
+ * First-order low-pass y += alpha (x - y) with a Q32 state.
+ * Scaling and overflow: x Q16.16 widened exactly to Q32; the difference
+ * saturates in int64; canfdi_mul_s64_q31 rounds half up. Output rounded to
+ * Q16.16.
+ */
+static int32_t pthr_lp(int64_t *y_q32, int32_t x_q16, canfdi_q31_t alpha_q31)
+{
+  const int64_t d = canfdi_sub_s64_sat((int64_t)x_q16 * 65536, *y_q32);
+  *y_q32 = canfdi_add_s64_sat(*y_q32, canfdi_mul_s64_q31(d, alpha_q31));
+  return pthr_q32_to_q16(*y_q32);
+}
+
+/* round(a * 2^sh / b) for a >= 0, b > 0 in 64 bits (init only), saturated
+ * to INT32_MAX. */
+static int32_t pthr_ratio_init(uint64_t a, unsigned sh, uint64_t b)
+{
+  const uint64_t q = ((a << sh) + (b / 2U)) / b;
+  return (q > (uint64_t)INT32_MAX) ? INT32_MAX : (int32_t)q;
+}
+
+/*
+ * e^-x in Q30 for x = x_q16 / 2^16 >= 0 (init only): range reduction
+ * x / 2^m < 1/2, a 12-term Taylor series in Q30 (int64, products < 2^60,
+ * integer division by n), then m squarings. Relative error < 1e-8 for
+ * x <= 32 (each squaring doubles the relative error of the series).
+ */
+static int64_t pthr_exp_neg_q30(int32_t x_q16)
+{
+  const int64_t one = (int64_t)1 << 30;
+  int64_t t;
+  int64_t term = one;
+  int64_t sum = one;
+  unsigned m = 0U;
+  unsigned n;
+  while ((m < 20U) && ((x_q16 >> m) > 32768)) {
+    m++;
+  }
+  t = ((int64_t)x_q16 << 14) >> m; /* Q30, < 2^29 */
+  for (n = 1U; n <= 12U; n++) {
+    term = -((term * t) >> 30) / (int64_t)n;
+    sum += term;
+  }
+  for (n = 0U; n < m; n++) {
+    sum = (sum * sum + (one >> 1)) >> 30;
+  }
+  return sum;
+}
+
+/*
+ * Weight beta of the interval mean of a first-order R-L current: with the
+ * voltage and the back-EMF constant over the interval, the exact mean is
+ * i_mean = i_k-1 + beta (i_k - i_k-1), beta = 1/(1 - e^-x) - 1/x, x = R T/L
+ * (beta -> 1/2 for L >> R T: the trapezoid; beta = 0.582 for the throttle,
+ * whose L/R equals the 1 ms step; beta = 1 for L = 0). Q31, init only.
+ */
+static canfdi_q31_t pthr_beta_q31(int32_t r_q24, int32_t l_q24)
+{
+  canfdi_q31_t beta = CANFDI_Q31_MAX;
+  if (l_q24 > 0) {
+    /* x in Q16: R T / L = R_q24 T_us 2^16 / (L_q24 1e6) */
+    const uint64_t xq = (((uint64_t)r_q24 * CANFDI_CFG_STEP_US) << 16) /
+                        ((uint64_t)l_q24 * 1000000U);
+    if (xq < 655U) { /* x < 0.01: series 1/2 + x/12, exact to 1e-8 */
+      beta = (canfdi_q31_t)((1LL << 30) + (int64_t)((xq << 15) / 12U));
+    } else if (xq < (32U << 16)) {
+      const int64_t a_q30 = pthr_exp_neg_q30((int32_t)xq);
+      const int64_t b_q30 = (((int64_t)1 << 60) / (((int64_t)1 << 30) - a_q30)) -
+                            (int64_t)(((uint64_t)1 << 46) / xq);
+      beta = canfdi_sat_s64_to_s32(b_q30 * 2);
+    } else { /* x >= 32: e^-x < 2e-14, beta = 1 - 1/x */
+      beta = canfdi_sat_s64_to_s32(((int64_t)1 << 31) - (int64_t)(((uint64_t)1 << 47) / xq));
+    }
+  }
+  return beta;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Configuration                                                            */
+/* ------------------------------------------------------------------------ */
+
+int32_t canfdi_parity_thr_cfg_check(const canfdi_parity_thr_cfg_t *cfg)
+{
+  int32_t out = CANFDI_OK;
+  unsigned k;
+  if (cfg == NULL) {
+    out = -CANFDI_EINVAL;
+  } else if (!pthr_in(cfg->tps1_zero_V_q16, 0, 5 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->tps2_zero_V_q16, 0, 5 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->tps_slope_V_rad_q16, PTHR_Q16(1, 10), 10 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->tps_sum_V_q16, 0, 10 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->tps_min_V_q16, 0, cfg->tps_max_V_q16) ||
+             !pthr_in(cfg->tps_max_V_q16, cfg->tps_min_V_q16, 10 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->i_max_A_q16, 1, 100 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->r_ohm_q24, PTHR_Q24(1, 100), PTHR_Q24(100, 1)) ||
+             !pthr_in(cfg->l_H_q24, 0, PTHR_Q24(1, 10)) ||
+             !pthr_in(cfg->k_Nm_A_q24, PTHR_Q24(1, 100), PTHR_Q24(10, 1)) ||
+             !pthr_in(cfg->j_kgm2_q24, PTHR_Q24(1, 10000), PTHR_Q24(1, 1)) ||
+             !pthr_in(cfg->b_Nms_q24, 0, PTHR_Q24(10, 1)) ||
+             !pthr_in(cfg->spring_Nm_rad_q24, 0, PTHR_Q24(10, 1)) ||
+             !pthr_in(cfg->pretension_Nm_q24, 0, PTHR_Q24(10, 1)) ||
+             !pthr_in(cfg->friction_Nm_q24, 0, PTHR_Q24(10, 1)) ||
+             !pthr_in(cfg->max_rad_q16, PTHR_Q16(1, 10), 4 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->limp_home_rad_q16, 0, cfg->max_rad_q16) ||
+             !pthr_in(cfg->lh_width_rad_q16, PTHR_Q16(1, 10000), PTHR_Q16(1, 10)) ||
+             !pthr_in(cfg->omega_c_rad_s, 20, 1000) ||
+             !pthr_in(cfg->obs_lambda_rad_s, 1, 100) || (cfg->obs_emf_gain_q31 < 0) ||
+             !pthr_in(cfg->stick_w_rad_s_q16, 0, PTHR_ONE_Q16) ||
+             !pthr_in(cfg->rest_w_rad_s_q16, 0, 100 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->jump_rad_q16, 0, PTHR_ONE_Q16) ||
+             (cfg->res_tau_us > 10000000U) || (cfg->select_ratio < 1U)) {
+    out = -CANFDI_EINVAL;
+  } else {
+    for (k = 0U; k < CANFDI_PARITY_THR_N_RES; k++) {
+      if ((canfdi_adapt_cfg_check(&cfg->band[k]) != CANFDI_OK) || (cfg->band[k].base <= 0)) {
+        out = -CANFDI_EINVAL;
+      }
+    }
+  }
+  return out;
+}
+
+int32_t canfdi_parity_thr_init(canfdi_parity_thr_t *p, const canfdi_parity_thr_cfg_t *cfg)
+{
+  int32_t out = canfdi_parity_thr_cfg_check(cfg);
+  if (p == NULL) {
+    out = -CANFDI_EINVAL;
+  }
+  if (out == CANFDI_OK) {
+    canfdi_svf_cfg_t sc;
+    unsigned k;
+    sc.order = 3U;
+    sc.omega_c_rad_s = cfg->omega_c_rad_s;
+    out = canfdi_svf_init(&p->svf_u, &sc);
+    out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_i, &sc) : out;
+    out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_th, &sc) : out;
+    for (k = 0U; (out == CANFDI_OK) && (k < CANFDI_PARITY_THR_N_RES); k++) {
+      out = canfdi_adapt_init(&p->thr[k], &cfg->band[k]);
+    }
+    if (out == CANFDI_OK) {
+      const uint64_t t_us = (uint64_t)CANFDI_CFG_STEP_US;
+      const uint64_t lam = (uint64_t)cfg->obs_lambda_rad_s;
+      p->cfg = cfg;
+      p->inv_slope_q24 = canfdi_div_s32_qn(PTHR_ONE_Q16, cfg->tps_slope_V_rad_q16, 24U);
+      /* T/J in Q24 = T_us 2^48 / (1e6 J_q24); L/T in Q24 = L_q24 1e6 / T_us;
+       * 1/K in Q24 = 2^48 / K_q24. All fit by the domain. */
+      p->t_over_j_q24 = pthr_ratio_init(t_us, 48U, 1000000U * (uint64_t)cfg->j_kgm2_q24);
+      p->l_over_t_q24 = pthr_ratio_init((uint64_t)cfg->l_H_q24 * 1000000U, 0U, t_us);
+      p->inv_k_q24 = pthr_ratio_init(1U, 48U, (uint64_t)cfg->k_Nm_A_q24);
+      p->inv_lhw_q16 = canfdi_div_s32_qn(PTHR_ONE_Q16, cfg->lh_width_rad_q16, 16U);
+      p->t_q31 = pthr_ratio_init(t_us, 31U, 1000000U);
+      /* observer: double pole at 1 - lambda T: l1 = 2 lambda T, l2 = lambda^2 T */
+      p->l1_q31 = pthr_ratio_init(2U * lam * t_us, 31U, 1000000U);
+      p->l2_q16 = pthr_ratio_init(lam * lam * t_us, 16U, 1000000U);
+      p->res_alpha_q31 = pthr_ratio_init(t_us, 31U, (uint64_t)cfg->res_tau_us + t_us);
+      p->beta_q31 = pthr_beta_q31(cfg->r_ohm_q24, cfg->l_H_q24);
+      p->diag.steps = 0U;
+      p->diag.resets = 0U;
+      p->diag.coast_entries = 0U;
+      p->diag.selections = 0U;
+      p->diag.releases = 0U;
+      p->diag.current_clips = 0U;
+      canfdi_parity_thr_reset(p);
+      p->diag.resets = 0U;
+    }
+  }
+  if ((p != NULL) && (out != CANFDI_OK)) {
+    p->cfg = NULL;
+  }
+  return out;
+}
+
+void canfdi_parity_thr_reset(canfdi_parity_thr_t *p)
+{
+  unsigned k;
+  if ((p != NULL) && (p->cfg != NULL)) {
+    p->primed = false;
+    p->settle = p->cfg->settle_steps;
+    p->arm_ok = 0U;
+    p->en_prev = false;
+    p->i_prev_q16 = 0;
+    p->th1_prev_q16 = 0;
+    p->th2_prev_q16 = 0;
+    p->ok_prev = 0U;
+    p->th_arm_q32 = 0;
+    p->th_arm_prev_q32 = 0;
+    p->inc_prev_q32 = 0;
+    p->th_hat_q32 = (int64_t)p->cfg->limp_home_rad_q16 * 65536;
+    p->w_hat_q32 = 0;
+    p->corr_q32 = 0;
+    p->pos_q32[0] = 0;
+    p->pos_q32[1] = 0;
+    p->src = CANFDI_PARITY_THR_SRC_MEAN;
+    p->cand = CANFDI_PARITY_THR_SRC_NONE;
+    p->cand_n = 0U;
+    p->in_band_n = 0U;
+    for (k = 0U; k < CANFDI_PARITY_THR_N_RES; k++) {
+      canfdi_adapt_reset(&p->thr[k]);
+      p->out.r_q16[k] = 0;
+      p->out.rn_q16[k] = 0;
+      p->out.thr_q16[k] = canfdi_adapt_threshold(&p->thr[k]);
+    }
+    p->out.valid = 0U;
+    p->out.exceed = 0U;
+    p->out.src = p->src;
+    p->out.theta_hat_rad_q16 = p->cfg->limp_home_rad_q16;
+    p->out.omega_hat_rad_s_q16 = 0;
+    p->out.theta1_rad_q16 = 0;
+    p->out.theta2_rad_q16 = 0;
+    p->diag.resets += (p->diag.resets < UINT32_MAX) ? 1U : 0U;
+  }
+}
+
+/* ------------------------------------------------------------------------ */
+/* The valve observer                                                       */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Prediction over one interval: mechanics driven by the interval-mean
+ * current, friction with stiction, then the back-EMF velocity blended in,
+ * then the angle (semi-implicit Euler) and the end stops.
+ * Scaling and overflow: torques Q40 in int64 (Q24 parameter x Q16.16
+ * signal, exact products < 2^62, saturating sums), reduced to Q24 (int32,
+ * +-128 N m) before multiplying by T/J (Q24) -> Q48 -> Q32 rad/s. The
+ * back-EMF voltage is formed in Q40 the same way and multiplied by 1/K.
+ * States theta (rad) and omega (rad/s) are Q32 in int64; omega is bounded
+ * to +-2000 rad/s and theta to [0, max].
+ */
+static void pthr_predict(canfdi_parity_thr_t *p, int32_t i_avg_q16, int32_t di_q16, int32_t u_q16,
+                         bool emf_ok, int64_t *th_q32, int64_t *w_q32)
+{
+  const canfdi_parity_thr_cfg_t *c = p->cfg;
+  const int64_t w0 = p->w_hat_q32;
+  const int32_t w0_q16 = pthr_q32_to_q16(w0);
+  const int32_t d_q16 = canfdi_sub_s32_sat(pthr_q32_to_q16(p->th_hat_q32), c->limp_home_rad_q16);
+  const int32_t sat_q16 = canfdi_clamp_s32(canfdi_mul_s32_qn(d_q16, p->inv_lhw_q16, 16U),
+                                           -PTHR_ONE_Q16, PTHR_ONE_Q16);
+  const int64_t tc_q40 = (int64_t)c->friction_Nm_q24 * 65536;
+  const int64_t stick_q32 = (int64_t)c->stick_w_rad_s_q16 * 65536;
+  int64_t drive;
+  int64_t w;
+  int64_t th;
+  drive = (int64_t)c->k_Nm_A_q24 * i_avg_q16;
+  drive = canfdi_sub_s64_sat(drive, (int64_t)c->b_Nms_q24 * w0_q16);
+  drive = canfdi_sub_s64_sat(drive, (int64_t)c->spring_Nm_rad_q24 * d_q16);
+  drive = canfdi_sub_s64_sat(drive, (int64_t)c->pretension_Nm_q24 * sat_q16);
+  if ((w0 < stick_q32) && (w0 > -stick_q32) && (drive <= tc_q40) && (drive >= -tc_q40)) {
+    w = 0; /* stuck: friction holds the driving torque */
+  } else {
+    const bool up = (w0 >= stick_q32) || ((w0 > -stick_q32) && (drive > 0));
+    const int64_t net = up ? canfdi_sub_s64_sat(drive, tc_q40) : canfdi_add_s64_sat(drive, tc_q40);
+    const int64_t dw = canfdi_asr64_rnd((int64_t)p->t_over_j_q24 * pthr_q40_to_q24(net), 16U);
+    w = canfdi_add_s64_sat(w0, dw);
+    /* friction cannot reverse the motion within a step */
+    if (((w0 > 0) && (w < 0)) || ((w0 < 0) && (w > 0))) {
+      w = 0;
+    }
+  }
+  if (emf_ok) {
+    /* w_el = (U - R i - (L/T) di) / K: a velocity measurement from the
+     * armature, independent of the potentiometers */
+    int64_t emf = (int64_t)u_q16 * ((int64_t)1 << 24);
+    int64_t w_el;
+    emf = canfdi_sub_s64_sat(emf, (int64_t)c->r_ohm_q24 * i_avg_q16);
+    emf = canfdi_sub_s64_sat(emf, (int64_t)p->l_over_t_q24 * di_q16);
+    w_el = canfdi_asr64_rnd((int64_t)p->inv_k_q24 * pthr_q40_to_q24(emf), 16U);
+    w = canfdi_add_s64_sat(w, canfdi_mul_s64_q31(canfdi_sub_s64_sat(w_el, w), c->obs_emf_gain_q31));
+  }
+  if (w > PTHR_W_MAX_Q32) {
+    w = PTHR_W_MAX_Q32;
+  } else if (w < -PTHR_W_MAX_Q32) {
+    w = -PTHR_W_MAX_Q32;
+  } else {
+    /* in range */
+  }
+  th = canfdi_add_s64_sat(p->th_hat_q32, canfdi_mul_s64_q31(w, p->t_q31));
+  if (th <= 0) {
+    th = 0;
+    w = (w < 0) ? 0 : w;
+  } else if (th >= ((int64_t)c->max_rad_q16 * 65536)) {
+    th = (int64_t)c->max_rad_q16 * 65536;
+    w = (w > 0) ? 0 : w;
+  } else {
+    /* between the stops */
+  }
+  *th_q32 = th;
+  *w_q32 = w;
+}
+
+/*
+ * Which measurement corrects the observer (see the header: gated mean,
+ * coasting, latched healthy sensor).
+ */
+static uint8_t pthr_source(canfdi_parity_thr_t *p, bool ok1, bool ok2, int32_t corr_q16,
+                           int32_t rate_q16)
+{
+  const canfdi_parity_thr_cfg_t *c = p->cfg;
+  uint8_t src = p->src;
+  if (!ok1 && !ok2) {
+    src = CANFDI_PARITY_THR_SRC_NONE;
+  } else if (ok1 != ok2) {
+    src = ok1 ? CANFDI_PARITY_THR_SRC_TPS1 : CANFDI_PARITY_THR_SRC_TPS2;
+  } else if (!canfdi_adapt_exceeds(&p->thr[CANFDI_PARITY_THR_CORR], corr_q16)) {
+    p->in_band_n = (p->in_band_n < UINT16_MAX) ? (uint16_t)(p->in_band_n + 1U) : p->in_band_n;
+    if ((src != CANFDI_PARITY_THR_SRC_MEAN) && (p->in_band_n >= c->release_steps)) {
+      src = CANFDI_PARITY_THR_SRC_MEAN;
+      p->diag.releases += (p->diag.releases < UINT32_MAX) ? 1U : 0U;
+    }
+    p->cand_n = 0U;
+  } else {
+    p->in_band_n = 0U;
+    if (src == CANFDI_PARITY_THR_SRC_MEAN) {
+      src = CANFDI_PARITY_THR_SRC_NONE; /* coast on the model */
+      p->cand_n = 0U;
+      p->diag.coast_entries += (p->diag.coast_entries < UINT32_MAX) ? 1U : 0U;
+    }
+    if (src == CANFDI_PARITY_THR_SRC_NONE) {
+      /* Trust the sensor the model agrees with, once the other clearly
+       * disagrees, the valve is at rest and the evidence persisted. */
+      const int32_t a1 = pthr_abs(p->out.r_q16[CANFDI_PARITY_THR_POS1]);
+      const int32_t a2 = pthr_abs(p->out.r_q16[CANFDI_PARITY_THR_POS2]);
+      const int64_t ratio = (int64_t)c->select_ratio;
+      const bool rest = (pthr_abs(rate_q16) <= c->rest_w_rad_s_q16);
+      uint8_t cand = CANFDI_PARITY_THR_SRC_NONE;
+      if (rest && ((int64_t)a1 > ratio * a2) && (a1 > p->out.thr_q16[CANFDI_PARITY_THR_POS1])) {
+        cand = CANFDI_PARITY_THR_SRC_TPS2;
+      } else if (rest && ((int64_t)a2 > ratio * a1) &&
+                 (a2 > p->out.thr_q16[CANFDI_PARITY_THR_POS2])) {
+        cand = CANFDI_PARITY_THR_SRC_TPS1;
+      } else {
+        /* no clear evidence */
+      }
+      if ((cand != CANFDI_PARITY_THR_SRC_NONE) && (cand == p->cand)) {
+        p->cand_n = (p->cand_n < UINT16_MAX) ? (uint16_t)(p->cand_n + 1U) : p->cand_n;
+      } else {
+        p->cand_n = (cand != CANFDI_PARITY_THR_SRC_NONE) ? 1U : 0U;
+      }
+      p->cand = cand;
+      if ((cand != CANFDI_PARITY_THR_SRC_NONE) && (p->cand_n >= c->select_steps)) {
+        src = cand;
+        p->diag.selections += (p->diag.selections < UINT32_MAX) ? 1U : 0U;
+      }
+    }
+  }
+  return src;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The step                                                                 */
+/* ------------------------------------------------------------------------ */
+
+const canfdi_parity_thr_out_t *canfdi_parity_thr_step(canfdi_parity_thr_t *p,
+                                                      const canfdi_parity_thr_in_t *in)
+{
+  const canfdi_parity_thr_out_t *out = NULL;
+  if ((p != NULL) && (p->cfg != NULL) && (in != NULL)) {
+    const canfdi_parity_thr_cfg_t *c = p->cfg;
+    const bool ok1 = pthr_in(in->tps1_V_q16, c->tps_min_V_q16, c->tps_max_V_q16);
+    const bool ok2 = pthr_in(in->tps2_V_q16, c->tps_min_V_q16, c->tps_max_V_q16);
+    const uint8_t ok = (uint8_t)((ok1 ? 1U : 0U) | (ok2 ? 2U : 0U));
+    const int32_t th1 = canfdi_mul_s32_qn(canfdi_sub_s32_sat(in->tps1_V_q16, c->tps1_zero_V_q16),
+                                          p->inv_slope_q24, 24U);
+    const int32_t th2 = canfdi_mul_s32_qn(canfdi_sub_s32_sat(c->tps2_zero_V_q16, in->tps2_V_q16),
+                                          p->inv_slope_q24, 24U);
+    const int32_t corr_raw = canfdi_sub_s32_sat(canfdi_add_s32_sat(in->tps1_V_q16, in->tps2_V_q16),
+                                                c->tps_sum_V_q16);
+    const bool clip = (in->i_A_q16 >= c->i_max_A_q16) || (in->i_A_q16 <= -c->i_max_A_q16);
+    const int32_t supply = (in->supply_V_q16 > 0) ? in->supply_V_q16 : 0;
+    const int32_t u_app = in->enabled ? canfdi_clamp_s32(in->u_V_q16, -supply, supply) : 0;
+    int32_t th_mean = c->limp_home_rad_q16;
+    int32_t i_avg;
+    int32_t di;
+    int32_t corr;
+    int64_t inc_q32;
+    int32_t th_arm_q16;
+    int32_t th_arm_avg;
+    int32_t rate;
+    int32_t th_hat_q16;
+    int32_t r[CANFDI_PARITY_THR_N_RES];
+    int64_t th_p;
+    int64_t w_p;
+    bool emf_ok;
+    int64_t acc;
+    uint8_t src;
+    uint8_t valid = 0U;
+    uint8_t exceed = 0U;
+    unsigned j;
+
+    if (ok1 && ok2) {
+      th_mean = canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)th1 + th2, 1U));
+    } else if (ok1) {
+      th_mean = th1;
+    } else if (ok2) {
+      th_mean = th2;
+    } else {
+      /* no position measurement: the limp-home angle as a placeholder */
+    }
+    if (!p->primed) {
+      p->i_prev_q16 = in->i_A_q16;
+      p->th1_prev_q16 = th1;
+      p->th2_prev_q16 = th2;
+      p->ok_prev = ok;
+      p->th_arm_q32 = (int64_t)th_mean * 65536;
+      p->th_arm_prev_q32 = p->th_arm_q32;
+      p->th_hat_q32 = (int64_t)th_mean * 65536;
+      p->w_hat_q32 = 0;
+      p->corr_q32 = (ok1 && ok2) ? ((int64_t)corr_raw * 65536) : 0;
+      p->pos_q32[0] = 0;
+      p->pos_q32[1] = 0;
+      p->en_prev = in->enabled;
+      canfdi_svf_reset(&p->svf_u, u_app);
+      canfdi_svf_reset(&p->svf_i, in->i_A_q16);
+      canfdi_svf_reset(&p->svf_th, th_mean);
+      p->primed = true;
+    }
+    /* ZOH alignment as in canfdi_parity_dcm.h: u is the voltage held over
+     * the interval, i enters as its interval mean. L/R of this motor equals
+     * the step, so the trapezoid (beta = 1/2) would be 8 % off in
+     * transients: the exact first-order weight beta is used instead. */
+    di = canfdi_sub_s32_sat(in->i_A_q16, p->i_prev_q16);
+    i_avg = canfdi_sat_s64_to_s32((int64_t)p->i_prev_q16 +
+                                  canfdi_asr64_rnd((int64_t)di * p->beta_q31, 31U));
+
+    /* Correlation residual, low-passed; held while a sensor is out of range. */
+    corr = pthr_q32_to_q16(p->corr_q32);
+    if (ok1 && ok2) {
+      corr = pthr_lp(&p->corr_q32, corr_raw, p->res_alpha_q31);
+    }
+
+    /* theta_arm: the angle whose derivative enters the armature residual,
+     * integrated from per-step increments. With both sensors in range the
+     * increment is the median of the two sensor increments and the previous
+     * increment, so a sensor that jumps (fault onset, in-range drift step)
+     * is outvoted; it never leaves [min(d1,d2), max(d1,d2)]. While the two
+     * agree, theta_arm leaks towards their mean (1/2^8 per step), which
+     * bounds the random walk of the median choices. */
+    {
+      const bool v1 = ok1 && ((p->ok_prev & 1U) != 0U);
+      const bool v2 = ok2 && ((p->ok_prev & 2U) != 0U);
+      const int32_t d1 = canfdi_sub_s32_sat(th1, p->th1_prev_q16);
+      const int32_t d2 = canfdi_sub_s32_sat(th2, p->th2_prev_q16);
+      if (v1 && v2) {
+        /* The mean increment, unless the two disagree by more than a jump
+         * noise cannot explain: then the median with the previous
+         * increment (switching between two noisy sensors every step would
+         * inject white speed noise, so it is done only on jumps). */
+        if (pthr_abs(canfdi_sub_s32_sat(d1, d2)) > c->jump_rad_q16) {
+          inc_q32 = pthr_median3_64((int64_t)d1 * 65536, (int64_t)d2 * 65536, p->inc_prev_q32);
+        } else {
+          inc_q32 = ((int64_t)d1 + (int64_t)d2) * 32768; /* exact */
+        }
+      } else if (v1) {
+        inc_q32 = (int64_t)d1 * 65536;
+      } else if (v2) {
+        inc_q32 = (int64_t)d2 * 65536;
+      } else {
+        inc_q32 = 0;
+      }
+      /* Q32 state: the mean increment (d1 + d2) / 2 and the leak are exact
+       * or rounded at 2^-32; rounding them to Q16.16 every step would add
+       * a speed bias of up to 1/4 LSB per ms (ties round up), i.e. 4 mrad/s
+       * in dtheta/dt, 1.5 mV in ARM. */
+      p->th_arm_prev_q32 = p->th_arm_q32;
+      p->th_arm_q32 = canfdi_add_s64_sat(p->th_arm_q32, inc_q32);
+      if (ok1 && ok2 && !canfdi_adapt_exceeds(&p->thr[CANFDI_PARITY_THR_CORR], corr)) {
+        p->th_arm_q32 = canfdi_add_s64_sat(
+            p->th_arm_q32,
+            canfdi_asr64_rnd(canfdi_sub_s64_sat((int64_t)th_mean * 65536, p->th_arm_q32),
+                             PTHR_LEAK_SHIFT));
+      }
+      p->inc_prev_q32 = inc_q32;
+      th_arm_q16 = pthr_q32_to_q16(p->th_arm_q32);
+      th_arm_avg = pthr_q32_to_q16(canfdi_asr64_rnd(
+          canfdi_add_s64_sat(p->th_arm_q32, p->th_arm_prev_q32), 1U));
+    }
+
+    /* Observer: predict, choose the correcting measurement, correct. */
+    rate = canfdi_svf_dy_q16(&p->svf_th); /* filtered angular speed, last step */
+    emf_ok = in->enabled && !clip && (pthr_abs(p->i_prev_q16) < c->i_max_A_q16);
+    pthr_predict(p, i_avg, di, u_app, emf_ok, &th_p, &w_p);
+    src = pthr_source(p, ok1, ok2, corr, rate);
+    p->src = src;
+    if ((src == CANFDI_PARITY_THR_SRC_NONE) && (ok1 || ok2) && !emf_ok) {
+      /* Coasting without the back-EMF speed (current clipped in a fast
+       * stroke, or bridge off): the mechanical model alone is poor there,
+       * whereas a sensor offset, even a drifting one, barely changes within
+       * a few steps: follow the jump-robust sensor increment instead. */
+      th_p = canfdi_add_s64_sat(p->th_hat_q32, inc_q32);
+    }
+    if (src != CANFDI_PARITY_THR_SRC_NONE) {
+      const int32_t y = (src == CANFDI_PARITY_THR_SRC_MEAN)   ? th_mean
+                        : (src == CANFDI_PARITY_THR_SRC_TPS1) ? th1
+                                                              : th2;
+      const int32_t e = canfdi_sub_s32_sat(y, pthr_q32_to_q16(th_p));
+      th_p = canfdi_add_s64_sat(th_p, canfdi_mul_s64_q31((int64_t)e * 65536, p->l1_q31));
+      w_p = canfdi_add_s64_sat(w_p, (int64_t)p->l2_q16 * e);
+    }
+    if (th_p < 0) {
+      th_p = 0;
+    } else if (th_p > ((int64_t)c->max_rad_q16 * 65536)) {
+      th_p = (int64_t)c->max_rad_q16 * 65536;
+    } else {
+      /* between the stops */
+    }
+    p->th_hat_q32 = th_p;
+    p->w_hat_q32 = w_p;
+    th_hat_q16 = pthr_q32_to_q16(th_p);
+
+    /* Model-versus-sensor residuals, low-passed like the correlation. */
+    r[CANFDI_PARITY_THR_POS1] = pthr_q32_to_q16(p->pos_q32[0]);
+    r[CANFDI_PARITY_THR_POS2] = pthr_q32_to_q16(p->pos_q32[1]);
+    if (ok1) {
+      r[CANFDI_PARITY_THR_POS1] =
+          pthr_lp(&p->pos_q32[0], canfdi_sub_s32_sat(th1, th_hat_q16), p->res_alpha_q31);
+    }
+    if (ok2) {
+      r[CANFDI_PARITY_THR_POS2] =
+          pthr_lp(&p->pos_q32[1], canfdi_sub_s32_sat(th2, th_hat_q16), p->res_alpha_q31);
+    }
+    r[CANFDI_PARITY_THR_CORR] = corr;
+
+    /* Armature residual r = u - R i - L di/dt - K dtheta/dt on SVF outputs.
+     * The bridge's terminal voltage is unknown while it is off: the filters
+     * restart on the enable edge and the residual waits settle_steps. */
+    if (in->enabled && !p->en_prev) {
+      canfdi_svf_reset(&p->svf_u, u_app);
+      canfdi_svf_reset(&p->svf_i, i_avg);
+      canfdi_svf_reset(&p->svf_th, th_arm_avg);
+    }
+    canfdi_svf_step(&p->svf_u, u_app);
+    canfdi_svf_step(&p->svf_i, i_avg);
+    canfdi_svf_step(&p->svf_th, th_arm_avg);
+    acc = (int64_t)canfdi_svf_y_q16(&p->svf_u) * ((int64_t)1 << 24);
+    acc = canfdi_sub_s64_sat(acc, (int64_t)c->r_ohm_q24 * canfdi_svf_y_q16(&p->svf_i));
+    acc = canfdi_sub_s64_sat(acc, (int64_t)c->l_H_q24 * canfdi_svf_dy_q16(&p->svf_i));
+    acc = canfdi_sub_s64_sat(acc, (int64_t)c->k_Nm_A_q24 * canfdi_svf_dy_q16(&p->svf_th));
+    r[CANFDI_PARITY_THR_ARM] = canfdi_sat_s64_to_s32(canfdi_asr64_rnd(acc, 24U));
+    if (clip) {
+      p->diag.current_clips += (p->diag.current_clips < UINT32_MAX) ? 1U : 0U;
+    }
+    if (in->enabled && !clip && (ok1 || ok2)) {
+      p->arm_ok = (p->arm_ok < UINT16_MAX) ? (uint16_t)(p->arm_ok + 1U) : p->arm_ok;
+    } else {
+      p->arm_ok = 0U;
+    }
+
+    if (p->settle > 0U) {
+      p->settle = (uint16_t)(p->settle - 1U);
+    }
+    if (p->settle == 0U) {
+      valid = (uint8_t)((ok1 && ok2) ? (1U << CANFDI_PARITY_THR_CORR) : 0U);
+      valid |= (uint8_t)((p->arm_ok >= c->settle_steps) ? (1U << CANFDI_PARITY_THR_ARM) : 0U);
+      valid |= (uint8_t)(ok1 ? (1U << CANFDI_PARITY_THR_POS1) : 0U);
+      valid |= (uint8_t)(ok2 ? (1U << CANFDI_PARITY_THR_POS2) : 0U);
+    }
+
+    /* Thresholds: the armature band widens with the rate of the voltage,
+     * the position and correlation bands with the angular speed. */
+    for (j = 0U; j < CANFDI_PARITY_THR_N_RES; j++) {
+      const int32_t th =
+          canfdi_adapt_step(&p->thr[j], (j == CANFDI_PARITY_THR_ARM) ? u_app : th_arm_q16);
+      p->out.thr_q16[j] = th;
+      p->out.r_q16[j] = r[j];
+      p->out.rn_q16[j] = canfdi_div_s32_qn(r[j], th, 16U);
+      if (((valid & (1U << j)) != 0U) && canfdi_adapt_exceeds(&p->thr[j], r[j])) {
+        exceed |= (uint8_t)(1U << j);
+      }
+    }
+    p->out.valid = valid;
+    p->out.exceed = exceed;
+    p->out.src = src;
+    p->out.theta_hat_rad_q16 = th_hat_q16;
+    p->out.omega_hat_rad_s_q16 = pthr_q32_to_q16(w_p);
+    p->out.theta1_rad_q16 = th1;
+    p->out.theta2_rad_q16 = th2;
+
+    p->i_prev_q16 = in->i_A_q16;
+    p->th1_prev_q16 = th1;
+    p->th2_prev_q16 = th2;
+    p->ok_prev = ok;
+    p->en_prev = in->enabled;
+    p->diag.steps += (p->diag.steps < UINT32_MAX) ? 1U : 0U;
+    out = &p->out;
+  }
+  return out;
+}
+
+int32_t canfdi_parity_thr_force_source(canfdi_parity_thr_t *p, uint8_t src)
+{
+  int32_t out = -CANFDI_EINVAL;
+  if ((p != NULL) && (p->cfg != NULL) && (src <= CANFDI_PARITY_THR_SRC_MEAN)) {
+    p->src = src;
+    p->in_band_n = 0U;
+    p->cand_n = 0U;
+    out = CANFDI_OK;
+  }
+  return out;
+}
+
+const canfdi_parity_thr_out_t *canfdi_parity_thr_out(const canfdi_parity_thr_t *p)
+{
+  return ((p != NULL) && (p->cfg != NULL)) ? &p->out : NULL;
+}
+
+const canfdi_parity_thr_diag_t *canfdi_parity_thr_diag(const canfdi_parity_thr_t *p)
+{
+  return (p != NULL) ? &p->diag : NULL;
+}
+
+void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg)
+{
+  unsigned k;
+  /* corr 0.01 V, armature 0.05 V, positions 0.012 rad (0.7 deg) */
+  static const int32_t base_q16[CANFDI_PARITY_THR_N_RES] = {
+      PTHR_Q16(1, 100), PTHR_Q16(5, 100), PTHR_Q16(12, 1000), PTHR_Q16(12, 1000)};
+  /* band growth per unit/s of excitation (2^-20 resolution): the armature
+   * band grows with |du/dt| [V per V/s], the position bands with the
+   * angular speed [rad per rad/s] (transient model error of the observer) */
+  static const int32_t gain[CANFDI_PARITY_THR_N_RES] = {0, 100, 0, 0};
+  if (cfg != NULL) {
+    cfg->tps1_zero_V_q16 = PTHR_Q16(1, 2);
+    cfg->tps2_zero_V_q16 = PTHR_Q16(9, 2);
+    /* 4 V over 90 deg: 8 / pi V/rad */
+    cfg->tps_slope_V_rad_q16 = PTHR_Q16(8000000, 3141593);
+    cfg->tps_sum_V_q16 = 5 * PTHR_ONE_Q16;
+    cfg->tps_min_V_q16 = PTHR_Q16(1, 4);
+    cfg->tps_max_V_q16 = PTHR_Q16(19, 4);
+    cfg->i_max_A_q16 = PTHR_Q16(98, 10);
+    cfg->r_ohm_q24 = PTHR_Q24(15, 10);
+    cfg->l_H_q24 = PTHR_Q24(15, 10000);
+    cfg->k_Nm_A_q24 = PTHR_Q24(383, 1000);
+    cfg->j_kgm2_q24 = PTHR_Q24(21, 10000);
+    cfg->b_Nms_q24 = PTHR_Q24(88, 10000);
+    cfg->spring_Nm_rad_q24 = PTHR_Q24(87, 1000);
+    cfg->pretension_Nm_q24 = PTHR_Q24(396, 1000);
+    cfg->friction_Nm_q24 = PTHR_Q24(284, 1000);
+    /* 6.5 deg, 0.5 deg, 90 deg */
+    cfg->limp_home_rad_q16 = PTHR_Q16(113446, 1000000);
+    cfg->lh_width_rad_q16 = PTHR_Q16(8727, 1000000);
+    cfg->max_rad_q16 = PTHR_Q16(1570796, 1000000);
+    cfg->omega_c_rad_s = 100;
+    cfg->obs_lambda_rad_s = 30;
+    cfg->obs_emf_gain_q31 = CANFDI_Q31_RATIO(3, 10);
+    cfg->stick_w_rad_s_q16 = PTHR_Q16(1, 1000);
+    cfg->rest_w_rad_s_q16 = PTHR_Q16(2, 10);
+    cfg->jump_rad_q16 = PTHR_Q16(1, 100);
+    cfg->res_tau_us = 10000U;
+    cfg->settle_steps = 60U;
+    cfg->select_steps = 20U;
+    cfg->release_steps = 200U;
+    cfg->select_ratio = 4U;
+    for (k = 0U; k < CANFDI_PARITY_THR_N_RES; k++) {
+      cfg->band[k].base = base_q16[k];
+      cfg->band[k].max = 16 * base_q16[k];
+      cfg->band[k].gain = gain[k];
+      cfg->band[k].gain_frac_bits = 20U;
+      cfg->band[k].tau_us = 20000U;
+    }
+  }
+}
