@@ -19,6 +19,7 @@
 #define CANFDI_EINVAL 2 /* an argument is out of its documented domain */
 #define CANFDI_ERANGE 3 /* a value does not fit its representation */
 #define CANFDI_ENODATA 4 /* no valid data (yet) */
+#define CANFDI_EIO 5     /* a port (flash, file, bus) reported an I/O error */
 
 /*
  * Invariant check. Internal invariants only; never used to validate inputs
