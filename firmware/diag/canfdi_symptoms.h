@@ -1,0 +1,74 @@
+/*
+ * canfdi_symptoms.h — the symptom vector: what the detection layer hands to
+ * fault-symptom reasoning (canfdi_diagnosis) once per 1 ms step.
+ *
+ * The application fills it from the detection modules (parity residuals,
+ * parameter estimators, range checks, voting, actuator plausibility) and
+ * passes it to canfdi_diagnosis_step(). Keeping it a plain struct lets
+ * diagnosis be tested on synthetic symptoms, without plants.
+ *
+ * Units: normalised residuals are residual / threshold in Q16.16 (65536 = on
+ * the threshold, sign kept); parameter deviations are (estimate - nominal) /
+ * nominal in Q16.16 (6554 ~ +10 %). A quantity whose valid bit is clear must
+ * be ignored (not converged, excluded, or not computed in this mode).
+ * Memory: 72 bytes. Cost: none (data only).
+ */
+#ifndef CANFDI_SYMPTOMS_H
+#define CANFDI_SYMPTOMS_H
+
+#include "core/canfdi_common.h"
+
+/* DC-motor structured residuals (model/canfdi_parity_dcm.h). */
+#define CANFDI_SYM_DCM_R1 0U /* armature equation, no M_L */
+#define CANFDI_SYM_DCM_R2 1U /* mechanical equation, no U_A */
+#define CANFDI_SYM_DCM_R3 2U /* without omega */
+#define CANFDI_SYM_DCM_R4 3U /* without I_A */
+/* Throttle residuals (model/canfdi_parity_thr.h). */
+#define CANFDI_SYM_THR_CORR 0U /* TPS1 + TPS2 - const */
+#define CANFDI_SYM_THR_ARM 1U  /* motor voltage equation */
+#define CANFDI_SYM_THR_POS1 2U /* model angle - TPS1 angle */
+#define CANFDI_SYM_THR_POS2 3U /* model angle - TPS2 angle */
+#define CANFDI_SYM_N_RES 4U
+
+/* Parameter deviations. */
+#define CANFDI_SYM_DCM_P_RA 0U
+#define CANFDI_SYM_DCM_P_PSI 1U
+#define CANFDI_SYM_DCM_P_J 2U
+#define CANFDI_SYM_DCM_P_FRICTION 3U /* lumped Coulomb friction + load */
+#define CANFDI_SYM_THR_P_R 0U
+#define CANFDI_SYM_THR_P_K 1U
+#define CANFDI_SYM_THR_P_SPRING 2U
+#define CANFDI_SYM_THR_P_FRICTION 3U
+#define CANFDI_SYM_N_PAR 4U
+
+/* Signal-based and manager symptoms, bits of canfdi_symptoms_t.flags. */
+#define CANFDI_SYM_F_TPS1_LOW (1UL << 0)        /* TPS1 below its range */
+#define CANFDI_SYM_F_TPS1_HIGH (1UL << 1)       /* TPS1 above its range */
+#define CANFDI_SYM_F_TPS2_LOW (1UL << 2)
+#define CANFDI_SYM_F_TPS2_HIGH (1UL << 3)
+#define CANFDI_SYM_F_TPS1_OUTLIER (1UL << 4)    /* isolated by the 2oo3 vote */
+#define CANFDI_SYM_F_TPS2_OUTLIER (1UL << 5)
+#define CANFDI_SYM_F_BRIDGE_A_DEAD (1UL << 6)   /* actuator manager plausibility */
+#define CANFDI_SYM_F_BRIDGE_B_DEAD (1UL << 7)
+#define CANFDI_SYM_F_THR_NOT_FOLLOWING (1UL << 8) /* position does not follow the command */
+#define CANFDI_SYM_F_THR_NO_CURRENT (1UL << 9)  /* voltage applied, no motor current */
+#define CANFDI_SYM_F_DCM_STEADY (1UL << 10)     /* quasi-static operating point */
+#define CANFDI_SYM_F_THR_STEADY (1UL << 11)
+#define CANFDI_SYM_F_DCM_EXCITED (1UL << 12)    /* estimators see enough excitation */
+#define CANFDI_SYM_F_THR_EXCITED (1UL << 13)
+
+typedef struct {
+  uint32_t now_ms;
+  int32_t dcm_rn_q16[CANFDI_SYM_N_RES];
+  int32_t thr_rn_q16[CANFDI_SYM_N_RES];
+  int32_t dcm_pdev_q16[CANFDI_SYM_N_PAR];
+  int32_t thr_pdev_q16[CANFDI_SYM_N_PAR];
+  uint8_t dcm_rn_valid;   /* bit i: dcm_rn_q16[i] valid */
+  uint8_t thr_rn_valid;
+  uint8_t dcm_pdev_valid; /* bit i: dcm_pdev_q16[i] valid (converged) */
+  uint8_t thr_pdev_valid;
+  uint32_t flags;         /* CANFDI_SYM_F_* */
+  int32_t thr_track_err_rad_q16; /* voted angle - setpoint, filtered */
+} canfdi_symptoms_t;
+
+#endif /* CANFDI_SYMPTOMS_H */
