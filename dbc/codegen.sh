@@ -4,6 +4,7 @@
 #   host_sim/gen/canfdi_faults.{h,c}         fault/DTC tables for the simulator
 #   firmware/comm/gen/canfdi_catalogue.{h,c} fault/DTC ids for the firmware
 #   firmware/comm/gen/canfdi_raw_limits.h    plausible raw range of each signal
+#   firmware/comm/gen/canfdi_sig_conv.h      raw <-> Q16.16 conversion constants
 #   firmware/comm/gen/canfdi_msg.{h,c}       cantools codec, node ECU, integers only
 #   host_sim/gen/canfdi_sim_msg.{h,c}        cantools codec, node PLANT
 # Everything is generated into a temporary tree first. cantools stamps the
@@ -20,6 +21,7 @@ FILES=(
   host_sim/gen/canfdi_faults.h host_sim/gen/canfdi_faults.c
   firmware/comm/gen/canfdi_catalogue.h firmware/comm/gen/canfdi_catalogue.c
   firmware/comm/gen/canfdi_raw_limits.h
+  firmware/comm/gen/canfdi_sig_conv.h
   firmware/comm/gen/canfdi_msg.h firmware/comm/gen/canfdi_msg.c
   host_sim/gen/canfdi_sim_msg.h host_sim/gen/canfdi_sim_msg.c
 )

@@ -20,6 +20,8 @@
  * *_is_in_phys_range(double), which firmware must never call.
  */
 #include "comm/canfdi_e2e.h"
+#include "comm/canfdi_rx.h"
+#include "comm/canfdi_tx.h"
 #include "core/canfdi_fixp.h"
 #include "detect/canfdi_adapt.h"
 #include "detect/canfdi_cusum.h"
@@ -27,10 +29,22 @@
 #include "detect/canfdi_meanvar.h"
 #include "detect/canfdi_trend.h"
 #include "diag/canfdi_debounce.h"
+#include "diag/canfdi_dtc.h"
+#include "diag/canfdi_nvm.h"
 #include "model/canfdi_svf.h"
 #include "model/canfdi_rls.h"
 #include "model/canfdi_est_dcm.h"
 #include "model/canfdi_est_thr.h"
+#include "model/canfdi_parity_dcm.h"
+#include "model/canfdi_parity_thr.h"
+#include "ft/canfdi_actmgr.h"
+#include "ft/canfdi_degrade.h"
+#include "ft/canfdi_vote.h"
+
+#include "ctrl/canfdi_ctrl_dcm.h"
+#include "ctrl/canfdi_ctrl_thr.h"
+#include "ctrl/canfdi_excite.h"
+#include "ctrl/canfdi_pi.h"
 
 /* Inputs the compiler cannot know. */
 static volatile int16_t in_s16[2];
@@ -375,6 +389,343 @@ static void guard_est_thr(void)
           d->mech_still_skips + d->clip_skips + d->resets);
 }
 
+/* Fault tolerance (firmware/ft): voting, degradation, actuator manager. */
+static void guard_ft(void)
+{
+  static canfdi_vote_t vote;
+  static canfdi_actmgr_t mgr;
+  static canfdi_degrade_t deg;
+  canfdi_vote_cfg_t vc;
+  canfdi_vote_in_t vin;
+  canfdi_vote_out_t vout;
+  canfdi_actmgr_cfg_t mc;
+  canfdi_actmgr_in_t mi;
+  canfdi_actmgr_out_t mout;
+  canfdi_degrade_transition_t tr;
+
+  vc.tps1_zero_V_q16 = in_s32[0];
+  vc.tps1_rad_per_V_q16 = in_s32[1];
+  vc.tps2_zero_V_q16 = in_s32[2];
+  vc.tps2_rad_per_V_q16 = -in_s32[1];
+  vc.tol_tps_rad_q16 = in_s32[0];
+  vc.tol_model_rad_q16 = in_s32[2];
+  vc.isolate_steps_tps = (uint16_t)in_u32;
+  vc.isolate_steps_model = (uint16_t)in_n;
+  vin.tps1_V_q16 = in_s32[0];
+  vin.tps2_V_q16 = in_s32[1];
+  vin.model_rad_q16 = in_s32[2];
+  vin.tps1_valid = (in_u32 & 1U) != 0U;
+  vin.tps2_valid = (in_u32 & 2U) != 0U;
+  vin.model_valid = (in_u32 & 4U) != 0U;
+  sink32(canfdi_vote_init(&vote, &vc));
+  sink32(canfdi_vote_step(&vote, &vin, &vout));
+  sink32(canfdi_vote_tps_to_rad_q16(in_s32[0], in_s32[1], in_s32[2]));
+  canfdi_vote_clear(&vote);
+  sink32((int32_t)canfdi_vote_diag(&vote).steps);
+
+  canfdi_actmgr_default_cfg(&mc);
+  mc.dcm_lag_max_steps = (uint8_t)in_n;
+  sink32(canfdi_actmgr_init(&mgr, &mc));
+  mi.dcm_u_ctrl_V_q16 = in_s32[0];
+  mi.dcm_ua_V_q16 = in_s32[1];
+  mi.dcm_supply_V_q16 = in_s32[2];
+  mi.dcm_ua_valid = vin.tps1_valid;
+  mi.dcm_supply_valid = vin.tps2_valid;
+  mi.thr_u_ctrl_V_q16 = in_s32[1];
+  mi.faults = in_u32;
+  mi.fail_silent = vin.model_valid;
+  mi.now_ms = in_u32;
+  sink32(canfdi_actmgr_step(&mgr, &mi, &vout, &mout));
+  sink32(mout.dcm.u_cmd_V_q16 + mout.thr.u_cmd_V_q16 + (int32_t)mout.dcm.bridge +
+         (int32_t)mout.dcm_ctrl_mode);
+  sink32(canfdi_actmgr_clear(&mgr, in_u32, (uint8_t)in_n, in_u32, in_u32));
+  sink32((int32_t)canfdi_degrade_state(canfdi_actmgr_degrade_dcm(&mgr)));
+  sink32((int32_t)canfdi_degrade_state(canfdi_actmgr_degrade_thr(&mgr)));
+  sink32((int32_t)canfdi_actmgr_diag(&mgr).steps);
+
+  sink32(canfdi_degrade_init(&deg));
+  sink32(canfdi_degrade_request(&deg, (uint8_t)in_u32, (uint8_t)in_n, in_u32));
+  sink32(canfdi_degrade_clear(&deg, (uint8_t)in_n, vin.tps1_valid, in_u32));
+  sink32((int32_t)canfdi_degrade_state(&deg));
+  sink32((int32_t)canfdi_degrade_reason(&deg));
+  sink32((int32_t)canfdi_degrade_since_ms(&deg));
+  sink32(canfdi_degrade_log_get(&deg, in_u32, &tr));
+  sink32((int32_t)tr.t_ms);
+  sink32((int32_t)canfdi_degrade_diag(&deg).transitions);
+}
+
+/* Control (firmware/ctrl): PI(D), DC motor speed, throttle position,
+ * excitation. */
+static void guard_ctrl(void)
+{
+  static canfdi_pi_t pi;
+  static canfdi_ctrl_dcm_t dcm;
+  static canfdi_ctrl_thr_t thr;
+  static canfdi_excite_t exc;
+  canfdi_pi_cfg_t pc;
+  canfdi_ctrl_dcm_cal_t dc;
+  canfdi_ctrl_dcm_in_t di;
+  canfdi_ctrl_dcm_out_t dout;
+  canfdi_ctrl_thr_cal_t tc;
+  canfdi_ctrl_thr_in_t ti;
+  canfdi_ctrl_thr_out_t tout;
+  canfdi_excite_cfg_t ec;
+  const canfdi_pi_diag_t *pd;
+
+  pc.kp_q16 = in_s32[0];
+  pc.ki_q16 = in_s32[1];
+  pc.kd_q16 = in_s32[2];
+  pc.kd_tau_us = in_u32;
+  pc.i_band_q16 = in_s32[0];
+  pc.out_min_q16 = in_s32[1];
+  pc.out_max_q16 = in_s32[2];
+  pc.anti_windup = (uint8_t)in_n;
+  sink32(canfdi_pi_init(&pi, &pc));
+  sink32(canfdi_pi_set_limits_q16(&pi, in_s32[0], in_s32[1]));
+  sink32(canfdi_pi_step_q16(&pi, in_s32[0], in_s32[1], in_s32[2], in_u32));
+  canfdi_pi_track_q16(&pi, in_s32[2]);
+  canfdi_pi_reset_q16(&pi, in_s32[0], in_s32[1]);
+  sink32(canfdi_pi_out_q16(&pi));
+  sink32(canfdi_pi_integral_q16(&pi));
+  sink32(canfdi_pi_saturation(&pi));
+  pd = canfdi_pi_diag(&pi);
+  sinku64((uint64_t)pd->steps + pd->sat_hi + pd->sat_lo + pd->int_holds + pd->tracks +
+          pd->resets);
+
+  canfdi_ctrl_dcm_cal_default(&dc);
+  dc.speed_kp_A_s_rad_q16 = in_s32[0];
+  dc.accel_max_rad_s2_q16 = in_s32[1];
+  sink32(canfdi_ctrl_dcm_init(&dcm, &dc));
+  di.speed_ref_rad_s_q16 = in_s32[0];
+  di.excite_rad_s_q16 = in_s32[1];
+  di.speed_rad_s_q16 = in_s32[2];
+  di.ia_A_q16 = in_s32[0];
+  di.supply_V_q16 = in_s32[1];
+  di.u_track_V_q16 = in_s32[2];
+  di.ia_valid = (in_u32 & 1U) != 0U;
+  di.mode = (uint8_t)in_n;
+  sink32(canfdi_ctrl_dcm_step(&dcm, &di, &dout));
+  sink32(dout.ia_ref_A_q16 + dout.speed_ref_rad_s_q16 + dout.u_limit_V_q16 + dout.u_sat);
+  sinku64(canfdi_ctrl_dcm_diag(&dcm)->steps);
+  sinku64(canfdi_ctrl_dcm_pi_diag(&dcm, (in_u32 & 2U) != 0U)->steps);
+
+  canfdi_ctrl_thr_cal_default(&tc);
+  tc.kp_V_rad_q16 = in_s32[0];
+  tc.rate_max_rad_s_q16 = in_s32[1];
+  sink32(canfdi_ctrl_thr_init(&thr, &tc));
+  ti.angle_ref_rad_q16 = in_s32[0];
+  ti.excite_rad_q16 = in_s32[1];
+  ti.angle_rad_q16 = in_s32[2];
+  ti.supply_V_q16 = in_s32[0];
+  ti.u_track_V_q16 = in_s32[1];
+  ti.mode = (uint8_t)in_n;
+  sink32(canfdi_ctrl_thr_step(&thr, &ti, &tout));
+  sink32(tout.u_ff_V_q16 + tout.angle_ref_rad_q16 + tout.u_limit_V_q16 + tout.u_sat);
+  sink32(canfdi_ctrl_thr_ff_q16(&thr, in_s32[0], in_s32[1]));
+  sinku64(canfdi_ctrl_thr_diag(&thr)->steps);
+  sinku64(canfdi_ctrl_thr_pi_diag(&thr)->steps);
+
+  ec.prbs_amp_q16 = in_s32[0];
+  ec.prbs_bit_us = in_u32;
+  ec.prbs_seed = (uint16_t)in_n;
+  ec.sine_amp_q16 = in_s32[1];
+  ec.sine_period_us = in_u32;
+  sink32(canfdi_excite_init(&exc, &ec));
+  canfdi_excite_enable(&exc, (in_u32 & 4U) != 0U);
+  sink32(canfdi_excite_step_q16(&exc));
+  sink32(canfdi_excite_active(&exc) ? 1 : 0);
+  sink32(canfdi_excite_sin_q15(in_u32));
+  sinku64(canfdi_excite_diag(&exc)->steps);
+}
+
+static void guard_parity_dcm(void)
+{
+  static canfdi_parity_dcm_cfg_t cfg;
+  static canfdi_parity_dcm_t p;
+  canfdi_parity_dcm_in_t in;
+  const canfdi_parity_dcm_out_t *o;
+
+  canfdi_parity_dcm_default_cfg(&cfg);
+  sink32(canfdi_parity_dcm_cfg_check(&cfg));
+  sink32(canfdi_parity_dcm_init(&p, &cfg));
+  sink32(canfdi_parity_dcm_set_ra(&p, in_s32[0]));
+  in.u_V_q16 = in_s32[0];
+  in.i_A_q16 = in_s32[1];
+  in.w_rad_s_q16 = in_s32[2];
+  in.load_Nm_q16 = in_s32[1];
+  o = canfdi_parity_dcm_step(&p, &in);
+  sink32((o != NULL) ? o->r_q16[0] : 0);
+  o = canfdi_parity_dcm_out(&p);
+  sink32((o != NULL) ? o->rn_q16[3] : 0);
+  sink32((int32_t)canfdi_parity_dcm_diag(&p)->steps);
+  canfdi_parity_dcm_reset(&p);
+}
+
+static void guard_parity_thr(void)
+{
+  static canfdi_parity_thr_cfg_t cfg;
+  static canfdi_parity_thr_t p;
+  canfdi_parity_thr_in_t in;
+  const canfdi_parity_thr_out_t *o;
+
+  canfdi_parity_thr_default_cfg(&cfg);
+  sink32(canfdi_parity_thr_cfg_check(&cfg));
+  sink32(canfdi_parity_thr_init(&p, &cfg));
+  sink32(canfdi_parity_thr_force_source(&p, (uint8_t)in_n));
+  in.tps1_V_q16 = in_s32[0];
+  in.tps2_V_q16 = in_s32[1];
+  in.i_A_q16 = in_s32[2];
+  in.u_V_q16 = in_s32[0];
+  in.supply_V_q16 = in_s32[1];
+  in.enabled = (in_n != 0U);
+  o = canfdi_parity_thr_step(&p, &in);
+  sink32((o != NULL) ? o->r_q16[1] : 0);
+  o = canfdi_parity_thr_out(&p);
+  sink32((o != NULL) ? o->theta_hat_rad_q16 : 0);
+  sink32((int32_t)canfdi_parity_thr_diag(&p)->steps);
+  canfdi_parity_thr_reset(&p);
+}
+
+/* DTC memory and its NVM storage (diag/canfdi_dtc, diag/canfdi_nvm): a RAM
+ * stand-in for two 128-byte flash banks with flash semantics. */
+static uint8_t guard_nvm_flash[2][128];
+
+static int32_t guard_nvm_read(void *ctx, uint8_t bank, uint32_t off, uint8_t *buf, uint32_t len)
+{
+  (void)ctx;
+  for (uint32_t i = 0U; i < len; i++) {
+    buf[i] = guard_nvm_flash[bank & 1U][(off + i) & 127U];
+  }
+  return 0;
+}
+
+static int32_t guard_nvm_write(void *ctx, uint8_t bank, uint32_t off, const uint8_t *buf, uint32_t len)
+{
+  (void)ctx;
+  for (uint32_t i = 0U; i < len; i++) {
+    guard_nvm_flash[bank & 1U][(off + i) & 127U] &= buf[i];
+  }
+  return 0;
+}
+
+static int32_t guard_nvm_erase(void *ctx, uint8_t bank)
+{
+  (void)ctx;
+  for (uint32_t i = 0U; i < 128U; i++) {
+    guard_nvm_flash[bank & 1U][i] = 0xFFU;
+  }
+  return 0;
+}
+
+static void guard_dtc(void)
+{
+  static canfdi_dtc_t dtc;
+  static uint8_t img[CANFDI_DTC_IMAGE_MAX_BYTES];
+  canfdi_dtc_ff_t ff;
+  canfdi_dtc_record_t rec;
+  uint16_t cursor = 0U;
+  uint32_t code = 0U;
+  uint8_t status = 0U;
+  const uint8_t idx = (uint8_t)in_n;
+
+  ff.time_ms = in_u32;
+  ff.omega_q16 = in_s32[0];
+  ff.ia_q16 = in_s32[1];
+  ff.ua_q16 = in_s32[2];
+  ff.thr_angle_q16 = in_s32[0];
+  ff.supply_q16 = in_s32[1];
+  ff.deg_dcm = (uint8_t)in_n;
+  ff.deg_thr = (uint8_t)in_u32;
+  sink32(canfdi_dtc_init(&dtc, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT));
+  sink32(canfdi_dtc_cycle_start(&dtc));
+  sink32(canfdi_dtc_report(&dtc, idx, (canfdi_deb_report_t)in_u32, &ff));
+  sink32(canfdi_dtc_find(&dtc, in_u32));
+  sink32(canfdi_dtc_status(&dtc, idx));
+  sink32(canfdi_dtc_fdc(&dtc, idx));
+  sink32((int32_t)canfdi_dtc_count_by_mask(&dtc, (uint8_t)in_u32));
+  sink32(canfdi_dtc_next_by_mask(&dtc, (uint8_t)in_u32, &cursor, &code, &status));
+  sinku64((uint64_t)code + status + cursor);
+  sink32(canfdi_dtc_read_record(&dtc, in_u32, &rec));
+  sinku64((uint64_t)rec.occurrence + (uint64_t)rec.ff.time_ms);
+  sink32(canfdi_dtc_cycle_end(&dtc));
+  sink32(canfdi_dtc_serialize(&dtc, img, (uint32_t)sizeof img));
+  sink32(canfdi_dtc_deserialize(&dtc, img, in_u32));
+  sink32(canfdi_dtc_clear(&dtc, in_u32));
+  sink32(canfdi_dtc_clear_group(&dtc, (uint8_t)in_n));
+  sink32(canfdi_dtc_invariants_hold(&dtc) ? 1 : 0);
+}
+
+static void guard_nvm(void)
+{
+  static const canfdi_nvm_port_t port = {NULL, guard_nvm_read, guard_nvm_write, guard_nvm_erase, 128U, 8U};
+  static canfdi_nvm_t nvm;
+  uint8_t buf[16];
+
+  for (unsigned i = 0U; i < 16U; i++) {
+    buf[i] = in_frame[i & 7U];
+  }
+  sinku64(canfdi_nvm_crc32_update(in_u32, buf, 16U));
+  sinku64(canfdi_nvm_crc32(buf, (uint32_t)in_n & 15U));
+  sink32(canfdi_nvm_init(&nvm, &port));
+  sink32(canfdi_nvm_store(&nvm, buf, (uint32_t)in_n & 15U));
+  sink32(canfdi_nvm_load(&nvm, buf, 16U));
+}
+
+/* comm/canfdi_rx + comm/canfdi_tx (helper 10): input supervision and the
+ * transmit side. */
+static void guard_rx(void)
+{
+  static canfdi_rx_t rx;
+  canfdi_rx_cfg_t cfg;
+  uint8_t frame[8];
+
+  for (unsigned i = 0U; i < 8U; i++) {
+    frame[i] = in_frame[i];
+  }
+  canfdi_rx_default_cfg(&cfg);
+  cfg.frame[0].timeout_cycles = (uint8_t)in_n;
+  sink32(canfdi_rx_init(&rx, &cfg, in_u32));
+  sink32(canfdi_rx_frame(&rx, in_u32, frame, (uint8_t)in_n, in_u32));
+  sink32(canfdi_rx_set_estimate(&rx, in_n, in_s32[0]));
+  sink32(canfdi_rx_step(&rx, in_u32));
+  sink32(canfdi_rx_monitor_result(&rx, in_n));
+  sinku64(canfdi_rx_monitor_fault_id(in_n));
+  sinku64(canfdi_rx_monitor_dtc(in_n));
+  sink32(canfdi_rx_raw_to_q16(in_s32[1], in_s64[0], in_s64[1]));
+  sink32(rx.in[CANFDI_RX_IN_DCM_IA].value_q16 + (int32_t)rx.in[CANFDI_RX_IN_DCM_IA].quality);
+  sinku64((uint64_t)rx.report.prefailed + rx.diag.frames);
+}
+
+static void guard_tx(void)
+{
+  static canfdi_tx_t tx;
+  static canfdi_tx_data_t data;
+  static canfdi_tx_frame_t out[CANFDI_TX_MAX_FRAMES_PER_STEP];
+  canfdi_tx_frame_t fr;
+
+  data.dcm_act.ua_cmd_q16 = in_s32[0];
+  data.dcm_act.bridge = (uint8_t)in_n;
+  data.thr_act.u_cmd_q16 = in_s32[1];
+  data.res_dcm.r_q16[0] = in_s32[2];
+  data.prm_dcm.j_q16 = in_s32[0];
+  data.status.deadline_misses = in_u32;
+  data.dtc.dtc = in_u32;
+  sink32(canfdi_tx_init(&tx));
+  sinku64(canfdi_tx_due(&tx));
+  sink32(canfdi_tx_dtc_event(&tx, &data.dtc));
+  sink32(canfdi_tx_step(&tx, &data, out));
+  sink32(canfdi_tx_encode_dcm_act(&tx, &data.dcm_act, &fr));
+  sink32(canfdi_tx_encode_thr_act(&tx, &data.thr_act, &fr));
+  sink32(canfdi_tx_encode_res_dcm(&tx, &data.res_dcm, &fr));
+  sink32(canfdi_tx_encode_res_thr(&tx, &data.res_thr, &fr));
+  sink32(canfdi_tx_encode_status(&tx, &data.status, &fr));
+  sink32(canfdi_tx_encode_diagnosis(&tx, &data.diagnosis, &fr));
+  sink32(canfdi_tx_encode_dtc(&tx, &data.dtc, (in_n & 1U) != 0U, &fr));
+  sink32(canfdi_tx_encode_prm_dcm(&tx, &data.prm_dcm, &fr));
+  sink32(canfdi_tx_encode_prm_thr(&tx, &data.prm_thr, &fr));
+  sinku64((uint64_t)fr.data[0] + out[0].data[7] + tx.diag.saturations);
+}
+
 int main(void)
 {
   guard_fixp();
@@ -389,6 +740,14 @@ int main(void)
   guard_rls();
   guard_est_dcm();
   guard_est_thr();
+  guard_parity_dcm();
+  guard_parity_thr();
+  guard_ft();
+  guard_ctrl();
+  guard_dtc();
+  guard_nvm();
+  guard_rx();
+  guard_tx();
   guard_generated();
   return 0;
 }
