@@ -194,6 +194,10 @@ int32_t canfdi_parity_dcm_cfg_check(const canfdi_parity_dcm_cfg_t *cfg)
               !pdcm_in(cfg->ra_min_ohm_q24, PDCM_Q24(1, 1000), cfg->ra_ohm_q24) ||
               !pdcm_in(cfg->ra_max_ohm_q24, cfg->ra_ohm_q24, PDCM_Q24(100, 1)))) {
     out = -CANFDI_EINVAL;
+  } else if (!pdcm_in(cfg->unc_ra_ohm_q24, 0, cfg->ra_ohm_q24) ||
+             !pdcm_in(cfg->unc_la_H_q24, 0, cfg->la_H_q24) ||
+             !pdcm_in(cfg->unc_j_kgm2_q24, 0, cfg->j_kgm2_q24)) {
+    out = -CANFDI_EINVAL;
   } else if ((cfg->load_tau_s > CANFDI_PARITY_DCM_TAU_MAX_S) ||
              ((cfg->load_tau_s != 0U) &&
               ((uint64_t)cfg->load_tau_s * 1000000U < 10U * (uint64_t)CANFDI_CFG_STEP_US))) {
@@ -253,6 +257,8 @@ int32_t canfdi_parity_dcm_init(canfdi_parity_dcm_t *p, const canfdi_parity_dcm_c
       p->k[CANFDI_PDCM_K_FP] = pdcm_coef_ratio(cfg->mf1_Nms_q24, 24U, cfg->psi_Vs_q24, 24U);
       p->k[CANFDI_PDCM_K_LP] = pdcm_coef_ratio(cfg->la_H_q24, 24U, cfg->psi_Vs_q24, 24U);
       p->k[CANFDI_PDCM_K_INVB] = pdcm_coef_ratio(1, 0U, cfg->w_band_rad_s_q16, 16U);
+      p->k[CANFDI_PDCM_K_IP] = pdcm_coef_ratio(1, 0U, cfg->psi_Vs_q24, 24U);
+      p->k[CANFDI_PDCM_K_ONE] = pdcm_coef_ratio(1, 0U, 1, 0U);
       pdcm_coef_ra(p);
       if (cfg->ra_track != 0U) {
         const uint64_t blk_us = (uint64_t)cfg->ra_block_steps * (uint64_t)CANFDI_CFG_STEP_US;
@@ -406,6 +412,23 @@ static void pdcm_ra_block(canfdi_parity_dcm_t *p)
   pdcm_clear_block(p);
 }
 
+/*
+ * One uncertainty term |dr/dp| * dp of a band, in residual units Q16.16.
+ * The sensitivity dr/dp arrives as a Q40 accumulator (built with pdcm_mac
+ * from the same filtered signals as the residual).
+ * Scaling and overflow: |acc| (saturating negate) is rounded half up to
+ * Q16.16 and saturated (a sensitivity beyond 32767 residual units per
+ * parameter unit only occurs far outside the signal ranges; the band is
+ * capped by band.max anyway), then multiplied by dp (Q8.24, >= 0) with
+ * canfdi_mul_s32_qn (exact 64-bit product, rounded half up, saturated).
+ */
+static int32_t pdcm_unc_term(int64_t acc, int32_t dp_q24)
+{
+  const int64_t a = (acc < 0) ? canfdi_sub_s64_sat(0, acc) : acc;
+  const int32_t s_q16 = canfdi_sat_s64_to_s32(canfdi_asr64_rnd(a, PDCM_ACC_FRAC - 16U));
+  return canfdi_mul_s32_qn(s_q16, dp_q24, PDCM_PAR_FRAC);
+}
+
 const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
                                                       const canfdi_parity_dcm_in_t *in)
 {
@@ -429,6 +452,7 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
     int32_t z_f;
     int32_t z_d;
     int32_t r[CANFDI_PARITY_DCM_N_RES];
+    int32_t unc[CANFDI_PARITY_DCM_N_RES];
     int64_t acc;
     uint8_t valid = 0U;
     uint8_t exceed = 0U;
@@ -508,6 +532,48 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
     acc = pdcm_mac(acc, k[CANFDI_PDCM_K_LP], z_d, PDCM_FRAC_Z, true);
     r[3] = pdcm_acc_out(p, acc);
 
+    /* Uncertainty bands: first-order propagation of the stated parameter
+     * uncertainties, sum over p of |dr/dp| dp on the filtered signals (the
+     * partial derivatives of the four equations, see the header). */
+    {
+      const int32_t dR = c->unc_ra_ohm_q24;
+      const int32_t dL = c->unc_la_H_q24;
+      const int32_t dJ = c->unc_j_kgm2_q24;
+      int64_t sr;
+      int64_t sl;
+      int64_t sj;
+      /* r1: dr/dR = -I, dr/dL = -dI */
+      sr = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], i_f, PDCM_FRAC_I, false);
+      sl = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], i_d, PDCM_FRAC_I, false);
+      unc[0] = canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL));
+      /* r2: dr/dJ = -dw */
+      sj = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], w_d, PDCM_FRAC_W, false);
+      unc[1] = pdcm_unc_term(sj, dJ);
+      /* r3: dr/dR = (M_F1 I + J dI) / Psi, dr/dL = (M_F1 dI + J d2I) / Psi,
+       *     dr/dJ = (R dI + L d2I - dU) / Psi */
+      sr = pdcm_mac(0, k[CANFDI_PDCM_K_FP], i_f, PDCM_FRAC_I, false);
+      sr = pdcm_mac(sr, k[CANFDI_PDCM_K_JP], i_d, PDCM_FRAC_I, false);
+      sl = pdcm_mac(0, k[CANFDI_PDCM_K_FP], i_d, PDCM_FRAC_I, false);
+      sl = pdcm_mac(sl, k[CANFDI_PDCM_K_JP], i_d2, PDCM_FRAC_I, false);
+      sj = pdcm_mac(0, k[CANFDI_PDCM_K_RP], i_d, PDCM_FRAC_I, false);
+      sj = pdcm_mac(sj, k[CANFDI_PDCM_K_LP], i_d2, PDCM_FRAC_I, false);
+      sj = pdcm_mac(sj, k[CANFDI_PDCM_K_IP], u_d, PDCM_FRAC_U, true);
+      unc[2] = canfdi_add_s32_sat(canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL)),
+                                  pdcm_unc_term(sj, dJ));
+      /* r4: dr/dR = -(M_F1 w + J dw + z) / Psi,
+       *     dr/dL = -(M_F1 dw + J d2w + dz) / Psi, dr/dJ = -(R dw + L d2w) / Psi */
+      sr = pdcm_mac(0, k[CANFDI_PDCM_K_FP], w_f, PDCM_FRAC_W, false);
+      sr = pdcm_mac(sr, k[CANFDI_PDCM_K_JP], w_d, PDCM_FRAC_W, false);
+      sr = pdcm_mac(sr, k[CANFDI_PDCM_K_IP], z_f, PDCM_FRAC_Z, false);
+      sl = pdcm_mac(0, k[CANFDI_PDCM_K_FP], w_d, PDCM_FRAC_W, false);
+      sl = pdcm_mac(sl, k[CANFDI_PDCM_K_JP], w_d2, PDCM_FRAC_W, false);
+      sl = pdcm_mac(sl, k[CANFDI_PDCM_K_IP], z_d, PDCM_FRAC_Z, false);
+      sj = pdcm_mac(0, k[CANFDI_PDCM_K_RP], w_d, PDCM_FRAC_W, false);
+      sj = pdcm_mac(sj, k[CANFDI_PDCM_K_LP], w_d2, PDCM_FRAC_W, false);
+      unc[3] = canfdi_add_s32_sat(canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL)),
+                                  pdcm_unc_term(sj, dJ));
+    }
+
     /* Validity: the SVFs need settle steps after (re)start; r2..r4 hold
      * only while the Coulomb term is +-M_F0, i.e. outside +-w_band, and
      * again settle steps after re-entering that region (the filter still
@@ -546,13 +612,16 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
       }
     }
 
-    /* Thresholds (excitation: the filtered U_A), normalisation, flags. */
+    /* Thresholds: the adaptive hook (excitation: the filtered U_A) plus
+     * the uncertainty band, capped at band.max; normalisation, flags. */
     for (j = 0U; j < CANFDI_PARITY_DCM_N_RES; j++) {
-      const int32_t th = canfdi_adapt_step(&p->thr[j], u_f);
+      const int32_t th = canfdi_clamp_s32(
+          canfdi_add_s32_sat(canfdi_adapt_step(&p->thr[j], u_f), unc[j]), 0, c->band[j].max);
+      const int64_t ra = ((int64_t)r[j] < 0) ? -(int64_t)r[j] : (int64_t)r[j];
       p->out.thr_q16[j] = th;
       p->out.r_q16[j] = r[j];
       p->out.rn_q16[j] = canfdi_div_s32_qn(r[j], th, 16U);
-      if (((valid & (1U << j)) != 0U) && canfdi_adapt_exceeds(&p->thr[j], r[j])) {
+      if (((valid & (1U << j)) != 0U) && (ra > (int64_t)th)) {
         exceed |= (uint8_t)(1U << j);
       }
     }
@@ -633,5 +702,12 @@ void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
     cfg->ra_min_ohm_q24 = PDCM_Q24(100, 100);
     cfg->ra_max_ohm_q24 = PDCM_Q24(200, 100);
     cfg->load_tau_s = 0U;
+    /* Stated uncertainties (derivation in the header, "Thresholds"):
+     * dR 10 mOhm = the tracker's lag bound, heating rate 0.17 mOhm/s times
+     * ra_tau 60 s; dL 2 % and dJ 2 % = the identification class of the
+     * parameters (issue 4 acceptance of the estimator). */
+    cfg->unc_ra_ohm_q24 = PDCM_Q24(1, 100);
+    cfg->unc_la_H_q24 = PDCM_Q24(682 * 2, 10000000);
+    cfg->unc_j_kgm2_q24 = PDCM_Q24(192 * 2, 10000000);
   }
 }

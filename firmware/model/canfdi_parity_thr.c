@@ -671,8 +671,12 @@ void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg)
       PTHR_Q16(1, 100), PTHR_Q16(5, 100), PTHR_Q16(12, 1000), PTHR_Q16(12, 1000)};
   /* band growth per unit/s of excitation (2^-20 resolution): the armature
    * band grows with |du/dt| [V per V/s], the position bands with the
-   * angular speed [rad per rad/s] (transient model error of the observer) */
-  static const int32_t gain[CANFDI_PARITY_THR_N_RES] = {0, 100, 0, 0};
+   * angular speed [rad per rad/s]: model-uncertainty propagation, see
+   * "Position bands" in the header. POS: gain = eps (tau + T) with
+   * eps = 5 % (relative speed error of the valve model), tau = 2 / lambda
+   * = 66.7 ms (the observer's error decay): 0.05 * 0.067667 s * 2^20 = 3548. */
+  static const int32_t gain[CANFDI_PARITY_THR_N_RES] = {0, 100, 3548, 3548};
+  static const uint32_t tau_us[CANFDI_PARITY_THR_N_RES] = {20000U, 20000U, 66667U, 66667U};
   if (cfg != NULL) {
     cfg->tps1_zero_V_q16 = PTHR_Q16(1, 2);
     cfg->tps2_zero_V_q16 = PTHR_Q16(9, 2);
@@ -710,7 +714,7 @@ void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg)
       cfg->band[k].max = 16 * base_q16[k];
       cfg->band[k].gain = gain[k];
       cfg->band[k].gain_frac_bits = 20U;
-      cfg->band[k].tau_us = 20000U;
+      cfg->band[k].tau_us = tau_us[k];
     }
   }
 }

@@ -152,6 +152,26 @@
  *
  * Thresholds: canfdi_adapt_t per residual; excitation u: the applied
  * voltage for ARM, theta_arm (so |dtheta/dt|) for CORR, POS1, POS2.
+ * Position bands (Isermann: adaptive threshold from model uncertainty).
+ * theta_hat moves with the model's speed (the back-EMF velocity blended
+ * into the mechanical prediction), so a relative error eps of that speed
+ * (K, R, spring, friction and inertia of the valve model, each known to
+ * datasheet class only) integrates to a position error eps |w| dt over a
+ * stroke, which the position feedback removes with the observer's error
+ * dynamics (double pole at lambda: decay time ~2 / lambda). The error is
+ * therefore bounded by eps times the stroke travelled in the last
+ * ~2 / lambda, which is what canfdi_adapt's low-pass of |dtheta/dt| with
+ * tau = 2 / lambda measures (f tau): band = base + eps (tau + T) f, i.e.
+ * gain = eps (tau + T) (canfdi_adapt.h, "Choosing the parameters").
+ * Default eps = 5 % (the substitute valve parameters are a class, not this
+ * valve), lambda 30 rad/s: tau 66.7 ms, gain 3.4 ms; a 40-deg stroke in
+ * 60 ms (f ~ 10 rad/s) widens the band by 0.034 rad for ~0.1 s. At rest
+ * (f = 0) the band is the base, 0.012 rad: a TPS offset of 2 % of full
+ * scale (0.1 V = 0.039 rad) stays 3 x outside in steady state; during and
+ * just after a large stroke it can be inside (accepted: the correlation
+ * residual CORR still sees it at once). Before this, closing strokes of
+ * more than ~40 deg drove POS1/POS2 to 1.75 x the fixed band in the 10 h
+ * bench; with it, 0.44 (bench_longrun).
  * out.rn_q16 = r / threshold (1.0 = threshold); exceed = valid and beyond.
  *
  * Scaling and overflow. Inputs Q16.16 (V, A). Angles Q16.16 rad; slope

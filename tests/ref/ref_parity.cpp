@@ -75,7 +75,8 @@ struct PdcmRef {
   double blk_ri = 0, blk_ii = 0, blk_rn = 0;
   bool blk_invalid = false;
   double bias[3] = {0, 0, 0};
-  double r[4] = {0, 0, 0, 0}, rn[4] = {0, 0, 0, 0};
+  double r[4] = {0, 0, 0, 0}, rn[4] = {0, 0, 0, 0}, thv[4] = {0, 0, 0, 0};
+  double dR = 0, dL = 0, dJ = 0;
   unsigned valid = 0;
 
   explicit PdcmRef(const canfdi_parity_dcm_cfg_t *c)
@@ -88,6 +89,9 @@ struct PdcmRef {
     F0 = q24d(c->mf0_Nm_q24);
     wband = q16d(c->w_band_rad_s_q16);
     ra = q24d(c->ra_ohm_q24);
+    dR = q24d(c->unc_ra_ohm_q24);
+    dL = q24d(c->unc_la_H_q24);
+    dJ = q24d(c->unc_j_kgm2_q24);
     for (int j = 0; j < 4; j++) thr[j].init(c->band[j]);
     settle = c->settle_steps;
     learn_left = c->ra_track ? c->ra_learn_blocks : 0;
@@ -159,7 +163,19 @@ struct PdcmRef {
         r[j] -= bias[j - 1];
       }
     }
-    for (int j = 0; j < 4; j++) rn[j] = r[j] / thr[j].step(su.y());
+    // Uncertainty bands: sum over p of |dr/dp| dp (canfdi_parity_dcm.h).
+    double unc[4];
+    unc[0] = dR * std::fabs(si.y()) + dL * std::fabs(si.dy());
+    unc[1] = dJ * std::fabs(sw.dy());
+    unc[2] = dR * std::fabs((F1 * si.y() + J * si.dy()) / Psi) + dL * std::fabs((F1 * si.dy() + J * si.d2y()) / Psi) +
+             dJ * std::fabs((ra * si.dy() + L * si.d2y() - su.dy()) / Psi);
+    unc[3] = dR * std::fabs((F1 * sw.y() + J * sw.dy() + sz.y()) / Psi) +
+             dL * std::fabs((F1 * sw.dy() + J * sw.d2y() + sz.dy()) / Psi) +
+             dJ * std::fabs((ra * sw.dy() + L * sw.d2y()) / Psi);
+    for (int j = 0; j < 4; j++) {
+      thv[j] = std::min(thr[j].step(su.y()) + unc[j], q16d(cfg->band[j].max));
+      rn[j] = r[j] / thv[j];
+    }
     if (cfg->ra_track) {
       if (settle == 0) {
         blk_rn += rn[0];
@@ -461,6 +477,7 @@ void run_dcm(ref::Tally &t, const DcmRun &run, canfdi_parity_dcm_cfg_t &cfg) {
   PdcmRef rf(&cfg);
   Cmp cmp;
   double max_dra = 0;
+  double max_thr_lsb[4] = {0, 0, 0, 0};
   const long n = std::lround(run.seconds / kT);
   uint32_t lfsr = 0xACE1U;
   double wref = 100.0;
@@ -483,6 +500,8 @@ void run_dcm(ref::Tally &t, const DcmRun &run, canfdi_parity_dcm_cfg_t &cfg) {
     if (o->valid != rf.valid) cmp.valid_mismatch++;
     for (int j = 0; j < 4; j++) {
       if ((o->valid & rf.valid) & (1U << j)) cmp.add(j, q16d(o->r_q16[j]), rf.r[j], kDcmTol[j]);
+      const double e = std::fabs(q16d(o->thr_q16[j]) - rf.thv[j]) * 65536.0;
+      max_thr_lsb[j] = std::max(max_thr_lsb[j], e);
     }
     max_dra = std::max(max_dra, std::fabs(q24d(o->ra_hat_ohm_q24) - rf.ra));
   }
@@ -497,6 +516,16 @@ void run_dcm(ref::Tally &t, const DcmRun &run, canfdi_parity_dcm_cfg_t &cfg) {
   t.check(cmp.valid_mismatch == 0, "dcm %s: validity flags identical (%ld mismatches)", run.name,
           cmp.valid_mismatch);
   t.check(max_dra <= 1e-4, "dcm %s: R_A estimates within 0.1 mOhm (%.2e Ohm)", run.name, max_dra);
+  // Thresholds: the uncertainty band is sum |dr/dp| dp over the same
+  // filtered signals, so its rounding error is that of the residual terms
+  // scaled by dp/p (<= 5 %: at most 5 LSB of the residual bounds), plus one
+  // rounding of each sensitivity (<= 0.5 LSB x dp) and of each of the three
+  // products (0.5 LSB), plus the R_A difference (<= 0.1 mOhm x |sensitivity|,
+  // < 1 LSB at the currents here): 8 LSB.
+  for (int j = 0; j < 4; j++) {
+    t.check(max_thr_lsb[j] <= 8.0, "dcm %s: threshold %d within 8 LSB (max %.1f LSB)", run.name, j + 1,
+            max_thr_lsb[j]);
+  }
 }
 
 // ---- throttle runs ----------------------------------------------------------------

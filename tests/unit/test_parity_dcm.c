@@ -279,6 +279,9 @@ static void break_cfg(canfdi_parity_dcm_cfg_t *c, int i)
   case 15: c->ra_max_ohm_q24 = c->ra_ohm_q24 - 1; break;
   case 16: c->ra_gate_q16 = 0; break;
   case 17: c->load_tau_s = CANFDI_PARITY_DCM_TAU_MAX_S + 1U; break;
+  case 18: c->unc_ra_ohm_q24 = -1; break;
+  case 19: c->unc_la_H_q24 = c->la_H_q24 + 1; break;
+  case 20: c->unc_j_kgm2_q24 = -1; break;
   default: c->ra_rate_max_ohm_s_q24 = -1; break;
   }
 }
@@ -525,6 +528,75 @@ END_TEST
 
 /* ---- reset, set_ra, extremes --------------------------------------------- */
 
+/*
+ * The uncertainty bands (header, "Thresholds"): in steady state only the
+ * dR terms remain, threshold = base + dR |I| for r1 and base + dR |z| / Psi
+ * (+ the tiny M_F1 w term) for r4, r2 exactly base: the bands stay tight.
+ * In a current ramp the dL term adds dL |dI/dt|. Inputs are noise-free
+ * synthetic samples; the SVFs are exact for a constant and converge to a
+ * ramp's slope within ~5/wc, so the expected values hold to a few LSB
+ * (steady) and to 5 % of the slope term (ramp, 100 ms = 10/wc after its
+ * start).
+ */
+START_TEST(uncertainty_band_tight_steady_wide_transient)
+{
+  const double R = 1.52, psi = 0.33, i0 = 4.0, w0 = 100.0, ml = 1.2;
+  const double base1 = fq16(g_cfg.band[0].base), base2 = fq16(g_cfg.band[1].base),
+               base4 = fq16(g_cfg.band[3].base);
+  double dR, dL, z, thr1, thr2, thr4, slope;
+  canfdi_parity_dcm_in_t in;
+  const canfdi_parity_dcm_out_t *o = NULL;
+  unsigned k;
+  init_default();
+  dR = (double)g_cfg.unc_ra_ohm_q24 / 16777216.0;
+  dL = (double)g_cfg.unc_la_H_q24 / 16777216.0;
+  ck_assert(dR > 0.0);
+  ck_assert(dL > 0.0);
+  in.u_V_q16 = q16(R * i0 + psi * w0);
+  in.i_A_q16 = q16(i0);
+  in.w_rad_s_q16 = q16(w0);
+  in.load_Nm_q16 = q16(ml);
+  for (k = 0U; k < 500U; k++) {
+    o = canfdi_parity_dcm_step(&g_p, &in);
+  }
+  z = ml + (double)g_cfg.mf0_Nm_q24 / 16777216.0; /* w > w_band: sgn 1 */
+  thr1 = fq16(o->thr_q16[0]);
+  thr2 = fq16(o->thr_q16[1]);
+  thr4 = fq16(o->thr_q16[3]);
+  ck_assert_msg(fabs(thr1 - (base1 + dR * i0)) < 3.0 / 65536.0, "r1 band %.5f, expected %.5f", thr1,
+                base1 + dR * i0);
+  ck_assert_msg(fabs(thr2 - base2) < 1.0 / 65536.0, "r2 band %.5f, expected base %.5f", thr2, base2);
+  /* r4: dR (z + M_F1 w) / Psi, M_F1 w = 0.036 N m */
+  {
+    const double e4 = base4 + dR * (z + 0.36e-3 * w0) / psi;
+    ck_assert_msg(fabs(thr4 - e4) < 3.0 / 65536.0, "r4 band %.5f, expected %.5f", thr4, e4);
+  }
+  /* every band tight in steady state: at most base + 1.5 dR-terms at 4 A */
+  ck_assert(thr1 < 1.5 * base1);
+  /* a 2 %-of-full-scale I_A offset (0.6 A) moves r1 by R 0.6 = 0.91 V: far
+   * outside the steady band */
+  ck_assert(R * 0.6 > 5.0 * thr1);
+
+  /* Current ramp 0 -> 10 A at 100 A/s with only dL: r1 band = base + dL dI */
+  g_cfg.unc_ra_ohm_q24 = 0;
+  g_cfg.unc_j_kgm2_q24 = 0;
+  ck_assert_int_eq(canfdi_parity_dcm_init(&g_p, &g_cfg), CANFDI_OK);
+  slope = 100.0;
+  for (k = 0U; k <= 100U; k++) {
+    const double i = slope * 1e-3 * (double)k;
+    in.i_A_q16 = q16(i);
+    in.u_V_q16 = q16(R * i + ((double)g_cfg.la_H_q24 / 16777216.0) * slope + psi * w0);
+    o = canfdi_parity_dcm_step(&g_p, &in);
+  }
+  thr1 = fq16(o->thr_q16[0]);
+  thr2 = fq16(o->thr_q16[1]);
+  ck_assert_msg(fabs(thr1 - (base1 + dL * slope)) < 0.05 * dL * slope, "r1 band in ramp %.6f, expected %.6f",
+                thr1, base1 + dL * slope);
+  ck_assert_msg(fabs(thr2 - base2) < 1.0 / 65536.0, "r2 band %.5f (dJ = 0)", thr2);
+  init_default(); /* g_cfg restored for the next test */
+}
+END_TEST
+
 START_TEST(reset_restarts_settling_keeps_ra)
 {
   canfdi_parity_dcm_in_t in = {q16(38.0), q16(4.0), q16(100.0), q16(1.2)};
@@ -601,13 +673,14 @@ static Suite *make_suite(void)
 
   tc = tcase_create("config");
   tcase_add_test(tc, default_cfg_valid);
-  tcase_add_loop_test(tc, invalid_cfg_rejected, 0, 19);
+  tcase_add_loop_test(tc, invalid_cfg_rejected, 0, 22);
   tcase_add_test(tc, tracking_off_accepts_odd_tracker_fields);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("fault_free");
   tcase_set_timeout(tc, 120);
   tcase_add_loop_test(tc, fault_free_inside_band, 0, 2);
+  tcase_add_test(tc, uncertainty_band_tight_steady_wide_transient);
   tcase_add_test(tc, load_tracking_keeps_decoupling);
   suite_add_tcase(s, tc);
 

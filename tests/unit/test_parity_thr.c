@@ -92,6 +92,9 @@ static double win_sd(const win_t *w, unsigned j)
 #define PROF_CONST 0U /* 20 deg */
 #define PROF_SINE 1U  /* 30 + 10 sin(2 pi 1 t) deg */
 #define PROF_STEPS 2U /* 20 <-> 40 deg every 0.5 s */
+#define PROF_BIG 3U   /* 10 <-> 70 deg every 1 s (strokes where the valve
+                       * model's speed error matters: the position bands
+                       * must widen with |dtheta/dt|) */
 
 static double angle_ref(unsigned prof, double t)
 {
@@ -100,6 +103,8 @@ static double angle_ref(unsigned prof, double t)
     a = 30.0 + (10.0 * sin(2.0 * 3.141592653589793 * t));
   } else if (prof == PROF_STEPS) {
     a = (((long)floor(t / 0.5)) % 2L == 0L) ? 20.0 : 40.0;
+  } else if (prof == PROF_BIG) {
+    a = (((long)floor(t / 1.0)) % 2L == 0L) ? 10.0 : 70.0;
   } else {
     /* constant */
   }
@@ -264,7 +269,7 @@ START_TEST(fault_free_inside_band)
   run_res_t res;
   unsigned j;
   static const char *const prof_name[] = {"const 20 deg", "sine 30+-10 deg 1 Hz",
-                                          "steps 20<->40 deg"};
+                                          "steps 20<->40 deg", "strokes 10<->70 deg"};
   base_run(&r);
   r.prof = (unsigned)_i;
   r.seed = 50U + (uint64_t)_i;
@@ -483,7 +488,7 @@ static Suite *make_suite(void)
 
   tc = tcase_create("fault_free");
   tcase_set_timeout(tc, 120);
-  tcase_add_loop_test(tc, fault_free_inside_band, 0, 3);
+  tcase_add_loop_test(tc, fault_free_inside_band, 0, 4);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("structure");
