@@ -11,7 +11,7 @@
  * the threshold, sign kept); parameter deviations are (estimate - nominal) /
  * nominal in Q16.16 (6554 ~ +10 %). A quantity whose valid bit is clear must
  * be ignored (not converged, excluded, or not computed in this mode).
- * Memory: 72 bytes. Cost: none (data only).
+ * Memory: 84 bytes on a 32-bit target. Cost: none (data only).
  */
 #ifndef CANFDI_SYMPTOMS_H
 #define CANFDI_SYMPTOMS_H
@@ -37,7 +37,7 @@
 #define CANFDI_SYM_DCM_P_FRICTION 3U /* lumped Coulomb friction + load */
 #define CANFDI_SYM_THR_P_R 0U
 #define CANFDI_SYM_THR_P_K 1U
-#define CANFDI_SYM_THR_P_SPRING 2U
+#define CANFDI_SYM_THR_P_SPRING 2U  /* return-spring pretension (better determined than k_s) */
 #define CANFDI_SYM_THR_P_FRICTION 3U
 #define CANFDI_SYM_N_PAR 4U
 
@@ -56,6 +56,7 @@
 #define CANFDI_SYM_F_THR_STEADY (1UL << 11)
 #define CANFDI_SYM_F_DCM_EXCITED (1UL << 12)    /* estimators see enough excitation */
 #define CANFDI_SYM_F_THR_EXCITED (1UL << 13)
+#define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 14) /* dcm_ua_cmd_rn_q16 valid */
 
 typedef struct {
   uint32_t now_ms;
@@ -69,6 +70,13 @@ typedef struct {
   uint8_t thr_pdev_valid;
   uint32_t flags;         /* CANFDI_SYM_F_* */
   int32_t thr_track_err_rad_q16; /* voted angle - setpoint, filtered */
+  /* Added for canfdi_diagnosis (helper 15): measured U_A minus the bridge
+   * command applied over the same interval, filtered, / its threshold
+   * (Q16.16, 1.0 = threshold). It is the one signal that tells a U_A sensor
+   * offset from an omega sensor offset: in the armature equation the two
+   * are the same term. Valid when CANFDI_SYM_F_DCM_UA_CMD_VALID is set
+   * (bridge driving, command not clamped, U_A valid). */
+  int32_t dcm_ua_cmd_rn_q16;
 } canfdi_symptoms_t;
 
 #endif /* CANFDI_SYMPTOMS_H */

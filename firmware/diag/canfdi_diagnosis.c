@@ -1,0 +1,670 @@
+/*
+ * canfdi_diagnosis.c — fault-symptom reasoning; the manual is the header.
+ */
+#include "diag/canfdi_diagnosis.h"
+
+#include "core/canfdi_fixp.h"
+
+#define Q16_ONE 65536
+#define COMP_DCM 0U
+#define COMP_THR 1U
+#define STEPS_MAX 10000U
+#define PAR_THR_MIN 66       /* 0.001 in Q16.16 */
+#define PAR_THR_MAX 655360   /* 10.0 */
+#define PATTERN_LEN 13U
+
+/*
+ * Model rules. pattern: one character per channel of the component, spaces
+ * ignored: '+' '-' '0' supporting, 'P' 'N' 'Z' necessary, '.' don't care.
+ * Keep one rule per line in this exact layout: tests/dbc/
+ * test_diagnosis_rules.py reads these lines to compare them with the
+ * measured symptom table.
+ */
+typedef struct {
+  uint8_t fault;
+  uint8_t comp;    /* COMP_DCM / COMP_THR */
+  uint8_t bipolar; /* pattern or its negation */
+  char pattern[PATTERN_LEN];
+} rule_t;
+
+/* clang-format off */
+static const rule_t model_rules[] = {
+  /*  fault                                   comp      bi  r1r2r3r4 RA Psi J Mc JPsi UAC */
+  { CANFDI_FAULT_DCM_RA_UP,               COMP_DCM, 0U, "+Z.+ PZ.. .0" },
+  { CANFDI_FAULT_DCM_FLUX_DOWN,           COMP_DCM, 0U, "-PPN 0N.. .0" },
+  { CANFDI_FAULT_DCM_FRICTION_UP,         COMP_DCM, 0U, "ZPP+ 00.+ .0" },
+  { CANFDI_FAULT_DCM_IA_SENSOR_OFFSET,    COMP_DCM, 1U, "NPPZ .... 00" },
+  { CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN,   COMP_DCM, 1U, "-.Z- 0... N0" },
+  { CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, COMP_DCM, 1U, "-ZZ- 0N.. ZZ" },
+  { CANFDI_FAULT_DCM_UA_SENSOR_OFFSET,    COMP_DCM, 1U, "+ZZ+ 0+.. 0P" },
+  /*  fault                                   comp      bi  CORR ARM POS1 POS2 R K spring friction */
+  { CANFDI_FAULT_THR_TPS1_DRIFT,          COMP_THR, 1U, "PZPZ .... .." },
+  { CANFDI_FAULT_THR_TPS2_DRIFT,          COMP_THR, 1U, "PZZN .... .." },
+  { CANFDI_FAULT_THR_SPRING_WEAK,         COMP_THR, 0U, "ZZ.. 0ZNZ .." },
+  { CANFDI_FAULT_THR_FRICTION_UP,         COMP_THR, 0U, "ZZ.. 0Z.P .." },
+  { CANFDI_FAULT_THR_MOTOR_R_UP,          COMP_THR, 0U, "Z+.. P0.. .." },
+  { CANFDI_FAULT_THR_MOTOR_OPEN,          COMP_THR, 0U, "0P-- NN.. .." },
+  { CANFDI_FAULT_THR_JAMMED,              COMP_THR, 1U, "ZZPP 00.. .." },
+};
+/* clang-format on */
+#define N_MODEL_RULES (sizeof(model_rules) / sizeof(model_rules[0]))
+
+/* Hard rules on the (persistent) flags. */
+typedef struct {
+  uint8_t fault;
+  uint8_t comp;
+  uint16_t req;    /* all of these */
+  uint16_t forbid; /* none of these */
+} hard_rule_t;
+
+static const hard_rule_t hard_rules[] = {
+    {CANFDI_FAULT_DCM_BRIDGE_A_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_A_DEAD, CANFDI_SYM_F_BRIDGE_B_DEAD},
+    {CANFDI_FAULT_DCM_BRIDGES_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_B_DEAD, 0U},
+    {CANFDI_FAULT_THR_TPS1_OPEN, COMP_THR, CANFDI_SYM_F_TPS1_LOW, CANFDI_SYM_F_TPS2_LOW},
+    {CANFDI_FAULT_THR_TPS1_SHORT, COMP_THR, CANFDI_SYM_F_TPS1_HIGH, 0U},
+    {CANFDI_FAULT_THR_TPS2_OPEN, COMP_THR, CANFDI_SYM_F_TPS2_LOW, CANFDI_SYM_F_TPS1_LOW},
+    {CANFDI_FAULT_THR_TPS2_SHORT, COMP_THR, CANFDI_SYM_F_TPS2_HIGH, 0U},
+    {CANFDI_FAULT_THR_TPS_BOTH_LOST, COMP_THR, CANFDI_SYM_F_TPS1_LOW | CANFDI_SYM_F_TPS2_LOW, 0U},
+    {CANFDI_FAULT_THR_TPS1_DRIFT, COMP_THR, CANFDI_SYM_F_TPS1_OUTLIER, CANFDI_SYM_F_TPS2_OUTLIER},
+    {CANFDI_FAULT_THR_TPS2_DRIFT, COMP_THR, CANFDI_SYM_F_TPS2_OUTLIER, CANFDI_SYM_F_TPS1_OUTLIER},
+    {CANFDI_FAULT_THR_MOTOR_OPEN, COMP_THR, CANFDI_SYM_F_THR_NO_CURRENT, 0U},
+    {CANFDI_FAULT_THR_JAMMED, COMP_THR, CANFDI_SYM_F_THR_NOT_FOLLOWING, CANFDI_SYM_F_THR_NO_CURRENT},
+};
+#define N_HARD_RULES (sizeof(hard_rules) / sizeof(hard_rules[0]))
+
+CANFDI_STATIC_ASSERT(CANFDI_FAULT_COUNT <= 32U, fault_ids_fit_the_mask);
+CANFDI_STATIC_ASSERT(N_MODEL_RULES == CANFDI_DIAG_N_RULES, rule_count_matches_the_header);
+CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_FLAGS <= 16U, flags_fit_uint16);
+
+/* Test verdicts while combining a hard and a model rule of one fault. */
+#define V_NA 0U   /* no such test */
+#define V_NONE 1U /* not tested */
+#define V_PASS 2U
+#define V_FAIL 3U
+
+static uint8_t comp_of_catalogue(uint8_t component)
+{
+  uint8_t c = 0xFFU;
+  if (component == CANFDI_COMPONENT_DC_MOTOR) {
+    c = (uint8_t)COMP_DCM;
+  } else if (component == CANFDI_COMPONENT_THROTTLE) {
+    c = (uint8_t)COMP_THR;
+  } else {
+    /* no diagnosis for other components */
+  }
+  return c;
+}
+
+static int32_t abs_sat(int32_t x)
+{
+  return (x >= 0) ? x : ((x == INT32_MIN) ? INT32_MAX : -x);
+}
+
+static bool steps_ok(uint16_t n)
+{
+  return (n >= 1U) && (n <= STEPS_MAX);
+}
+
+static bool par_ok(int32_t t)
+{
+  return (t >= PAR_THR_MIN) && (t <= PAR_THR_MAX);
+}
+
+void canfdi_diagnosis_default_cfg(canfdi_diagnosis_cfg_t *cfg)
+{
+  if (cfg != NULL) {
+    cfg->on_q16 = Q16_ONE;
+    cfg->off_q16 = 52429; /* 0.8 */
+    cfg->weight_cap_q16 = 4 * Q16_ONE;
+    cfg->sym_on_steps = 20U;
+    cfg->sym_off_steps = 50U;
+    cfg->flag_on_steps = 10U;
+    cfg->flag_off_steps = 10U;
+    cfg->isolate_steps = 20U;
+    cfg->conf_min_pct = 50U;
+    cfg->margin_pct = 10U;
+    /* 1 % = 655.36 in Q16.16 */
+    cfg->dcm_par_pos_q16[CANFDI_SYM_DCM_P_RA] = 5243;   /* +8 % */
+    cfg->dcm_par_neg_q16[CANFDI_SYM_DCM_P_RA] = 13107;  /* -20 % */
+    cfg->dcm_par_pos_q16[CANFDI_SYM_DCM_P_PSI] = 1638;  /* 2.5 % */
+    cfg->dcm_par_neg_q16[CANFDI_SYM_DCM_P_PSI] = 1638;
+    cfg->dcm_par_pos_q16[CANFDI_SYM_DCM_P_J] = 3277;    /* 5 % */
+    cfg->dcm_par_neg_q16[CANFDI_SYM_DCM_P_J] = 3277;
+    cfg->dcm_par_pos_q16[CANFDI_SYM_DCM_P_FRICTION] = 1966; /* +3 % */
+    cfg->dcm_par_neg_q16[CANFDI_SYM_DCM_P_FRICTION] = 6554; /* -10 % */
+    cfg->thr_par_pos_q16[CANFDI_SYM_THR_P_R] = 5243;    /* +8 % */
+    cfg->thr_par_neg_q16[CANFDI_SYM_THR_P_R] = 13107;   /* -20 % */
+    cfg->thr_par_pos_q16[CANFDI_SYM_THR_P_K] = 6554;    /* 10 % */
+    cfg->thr_par_neg_q16[CANFDI_SYM_THR_P_K] = 6554;
+    cfg->thr_par_pos_q16[CANFDI_SYM_THR_P_SPRING] = 13107; /* +20 % */
+    cfg->thr_par_neg_q16[CANFDI_SYM_THR_P_SPRING] = 6554;  /* -10 %: pretension */
+    cfg->thr_par_pos_q16[CANFDI_SYM_THR_P_FRICTION] = 5243;  /* +8 % */
+    cfg->thr_par_neg_q16[CANFDI_SYM_THR_P_FRICTION] = 13107; /* -20 % */
+    cfg->jpsi_q16 = 1311; /* 2 % */
+  }
+}
+
+int32_t canfdi_diagnosis_cfg_check(const canfdi_diagnosis_cfg_t *cfg)
+{
+  int32_t rc = CANFDI_OK;
+  uint32_t i;
+  if (cfg == NULL) {
+    rc = -CANFDI_EINVAL;
+  } else if ((cfg->off_q16 <= 0) || (cfg->off_q16 > cfg->on_q16) || (cfg->on_q16 > 16 * Q16_ONE) ||
+             (cfg->weight_cap_q16 < Q16_ONE) || (cfg->weight_cap_q16 > 16 * Q16_ONE) ||
+             !steps_ok(cfg->sym_on_steps) || !steps_ok(cfg->sym_off_steps) ||
+             !steps_ok(cfg->flag_on_steps) || !steps_ok(cfg->flag_off_steps) ||
+             !steps_ok(cfg->isolate_steps) || (cfg->conf_min_pct > 100U) || (cfg->margin_pct > 100U) ||
+             !par_ok(cfg->jpsi_q16)) {
+    rc = -CANFDI_EINVAL;
+  } else {
+    for (i = 0U; i < CANFDI_SYM_N_PAR; i++) {
+      if (!par_ok(cfg->dcm_par_pos_q16[i]) || !par_ok(cfg->dcm_par_neg_q16[i]) ||
+          !par_ok(cfg->thr_par_pos_q16[i]) || !par_ok(cfg->thr_par_neg_q16[i])) {
+        rc = -CANFDI_EINVAL;
+      }
+    }
+  }
+  return rc;
+}
+
+static void pers_clear(canfdi_diagnosis_pers_t *p, int8_t state)
+{
+  p->state = state;
+  p->cand = state;
+  p->n = 0U;
+}
+
+void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
+{
+  uint32_t c;
+  uint32_t j;
+  if ((d != NULL) && d->initialised) {
+    for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+      for (j = 0U; j < CANFDI_DIAG_N_CH; j++) {
+        pers_clear(&d->ch[c][j], CANFDI_DIAG_SYM_UNKNOWN);
+        d->x_q16[c][j] = 0;
+      }
+      d->res[c] = (canfdi_diagnosis_result_t){0};
+      d->win_n[c] = 0U;
+      d->win_id[c] = 0U;
+    }
+    for (j = 0U; j < CANFDI_DIAG_N_FLAGS; j++) {
+      pers_clear(&d->flag[j], CANFDI_DIAG_SYM_ZERO);
+    }
+    d->corr_not_isolated = false;
+    d->failed_mask = 0U;
+  }
+}
+
+/* Pattern string -> masks (init only). */
+static void compile_rule(const rule_t *r, canfdi_diagnosis_rule_t *m)
+{
+  uint32_t j = 0U;
+  uint32_t k;
+  *m = (canfdi_diagnosis_rule_t){0};
+  for (k = 0U; (k < PATTERN_LEN) && (r->pattern[k] != '\0') && (j < CANFDI_DIAG_N_CH); k++) {
+    const char e = r->pattern[k];
+    const uint16_t b = (uint16_t)(1U << j);
+    if (e != ' ') {
+      if ((e == 'P') || (e == 'N') || (e == 'Z')) {
+        m->nec = (uint16_t)(m->nec | b);
+      }
+      if ((e == 'P') || (e == '+')) {
+        m->pos = (uint16_t)(m->pos | b);
+      } else if ((e == 'N') || (e == '-')) {
+        m->neg = (uint16_t)(m->neg | b);
+      } else if ((e == 'Z') || (e == '0')) {
+        m->zero = (uint16_t)(m->zero | b);
+      } else {
+        /* '.': don't care */
+      }
+      j++;
+    }
+  }
+  m->care = (uint16_t)(m->pos | m->neg | m->zero);
+}
+
+int32_t canfdi_diagnosis_init(canfdi_diagnosis_t *d, const canfdi_diagnosis_cfg_t *cfg)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  uint32_t i;
+  if (d != NULL) {
+    d->initialised = false;
+    if (canfdi_diagnosis_cfg_check(cfg) == CANFDI_OK) {
+      d->cfg = *cfg;
+      for (i = 0U; i < CANFDI_SYM_N_PAR; i++) {
+        /* 2^32 / threshold: x = dev * inv / 2^16 is dev / threshold in Q16.16 */
+        d->inv_pos_q16[COMP_DCM][i] = canfdi_div_s32_qn(Q16_ONE, cfg->dcm_par_pos_q16[i], 16U);
+        d->inv_neg_q16[COMP_DCM][i] = canfdi_div_s32_qn(Q16_ONE, cfg->dcm_par_neg_q16[i], 16U);
+        d->inv_pos_q16[COMP_THR][i] = canfdi_div_s32_qn(Q16_ONE, cfg->thr_par_pos_q16[i], 16U);
+        d->inv_neg_q16[COMP_THR][i] = canfdi_div_s32_qn(Q16_ONE, cfg->thr_par_neg_q16[i], 16U);
+      }
+      d->inv_jpsi_q16 = canfdi_div_s32_qn(Q16_ONE, cfg->jpsi_q16, 16U);
+      for (i = 0U; i < N_MODEL_RULES; i++) {
+        compile_rule(&model_rules[i], &d->rule[i]);
+      }
+      d->diag = (canfdi_diagnosis_diag_t){0};
+      d->initialised = true;
+      canfdi_diagnosis_reset(d);
+      rc = CANFDI_OK;
+    }
+  }
+  return rc;
+}
+
+/* Ternary of this step with hysteresis around the present state. */
+static int8_t ternary(const canfdi_diagnosis_t *d, int32_t x, int8_t state)
+{
+  const int32_t ax = abs_sat(x);
+  const int8_t sg = (x > 0) ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_NEG;
+  int8_t t = CANFDI_DIAG_SYM_ZERO;
+  if (ax >= d->cfg.on_q16) {
+    t = sg;
+  } else if ((ax >= d->cfg.off_q16) && (state == sg)) {
+    t = sg;
+  } else {
+    /* below off, or in the band without history: absent */
+  }
+  return t;
+}
+
+static void pers_step(canfdi_diagnosis_pers_t *p, bool valid, int8_t t, uint16_t on_steps,
+                      uint16_t off_steps)
+{
+  if (!valid) {
+    pers_clear(p, CANFDI_DIAG_SYM_UNKNOWN);
+  } else {
+    if (p->state == CANFDI_DIAG_SYM_UNKNOWN) {
+      /* a channel that returns starts from "absent": a symptom must persist */
+      pers_clear(p, CANFDI_DIAG_SYM_ZERO);
+    }
+    if (t == p->state) {
+      p->cand = t;
+      p->n = 0U;
+    } else {
+      if (t != p->cand) {
+        p->cand = t;
+        p->n = 0U;
+      }
+      if (p->n < UINT16_MAX) {
+        p->n++;
+      }
+      if (p->n >= ((t == CANFDI_DIAG_SYM_ZERO) ? off_steps : on_steps)) {
+        p->state = t;
+        p->n = 0U;
+      }
+    }
+  }
+}
+
+static void channel(canfdi_diagnosis_t *d, uint32_t c, uint32_t j, int32_t x, bool valid)
+{
+  canfdi_diagnosis_pers_t *p = &d->ch[c][j];
+  d->x_q16[c][j] = valid ? x : 0;
+  pers_step(p, valid, ternary(d, x, p->state), d->cfg.sym_on_steps, d->cfg.sym_off_steps);
+}
+
+/* Relative deviation / its threshold on that side, Q16.16. */
+static int32_t par_norm(const canfdi_diagnosis_t *d, uint32_t c, uint32_t i, int32_t dev)
+{
+  const int32_t inv = (dev >= 0) ? d->inv_pos_q16[c][i] : d->inv_neg_q16[c][i];
+  return canfdi_mul_s32_qn(dev, inv, 16U);
+}
+
+static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
+{
+  uint32_t i;
+  bool v;
+  int32_t x;
+  for (i = 0U; i < CANFDI_SYM_N_RES; i++) {
+    channel(d, COMP_DCM, i, s->dcm_rn_q16[i], (s->dcm_rn_valid & (1U << i)) != 0U);
+    channel(d, COMP_THR, i, s->thr_rn_q16[i], (s->thr_rn_valid & (1U << i)) != 0U);
+  }
+  for (i = 0U; i < CANFDI_SYM_N_PAR; i++) {
+    channel(d, COMP_DCM, CANFDI_SYM_N_RES + i, par_norm(d, COMP_DCM, i, s->dcm_pdev_q16[i]),
+            (s->dcm_pdev_valid & (1U << i)) != 0U);
+    channel(d, COMP_THR, CANFDI_SYM_N_RES + i, par_norm(d, COMP_THR, i, s->thr_pdev_q16[i]),
+            (s->thr_pdev_valid & (1U << i)) != 0U);
+  }
+  v = ((s->dcm_pdev_valid & (1U << CANFDI_SYM_DCM_P_J)) != 0U) &&
+      ((s->dcm_pdev_valid & (1U << CANFDI_SYM_DCM_P_PSI)) != 0U);
+  x = canfdi_mul_s32_qn(canfdi_sub_s32_sat(s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J],
+                                           s->dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI]),
+                        d->inv_jpsi_q16, 16U);
+  channel(d, COMP_DCM, CANFDI_DIAG_CH_DCM_JPSI, x, v);
+  channel(d, COMP_DCM, CANFDI_DIAG_CH_DCM_UAC, s->dcm_ua_cmd_rn_q16,
+          (s->flags & CANFDI_SYM_F_DCM_UA_CMD_VALID) != 0U);
+  channel(d, COMP_THR, 8U, 0, false);
+  channel(d, COMP_THR, 9U, 0, false);
+  for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
+    const int8_t t = ((s->flags & ((uint32_t)1U << i)) != 0U) ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO;
+    pers_step(&d->flag[i], true, t, d->cfg.flag_on_steps, d->cfg.flag_off_steps);
+  }
+}
+
+static uint32_t flags_now(const canfdi_diagnosis_t *d)
+{
+  uint32_t f = 0U;
+  uint32_t i;
+  for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
+    if (d->flag[i].state == CANFDI_DIAG_SYM_POS) {
+      f |= ((uint32_t)1U << i);
+    }
+  }
+  return f;
+}
+
+static bool hard_fires(const hard_rule_t *h, uint32_t f)
+{
+  return ((f & h->req) == h->req) && ((f & h->forbid) == 0U);
+}
+
+/* Observed symptoms of component c as bit masks, and the weight of each
+ * channel: clamp(|x|, 1, cap) while it shows a symptom, else 1 (Q16.16). */
+static void observe(canfdi_diagnosis_t *d, uint32_t c)
+{
+  uint32_t j;
+  uint16_t pos = 0U;
+  uint16_t neg = 0U;
+  uint16_t zero = 0U;
+  for (j = 0U; j < CANFDI_DIAG_N_CH; j++) {
+    const int8_t st = d->ch[c][j].state;
+    const uint16_t b = (uint16_t)(1U << j);
+    uint32_t w = (uint32_t)Q16_ONE;
+    if (st == CANFDI_DIAG_SYM_POS) {
+      pos = (uint16_t)(pos | b);
+    } else if (st == CANFDI_DIAG_SYM_NEG) {
+      neg = (uint16_t)(neg | b);
+    } else if ((st == CANFDI_DIAG_SYM_ZERO) && (d->ch[c][j].cand == CANFDI_DIAG_SYM_ZERO)) {
+      /* "absent" only while settled: a channel on its way to +/- (its
+       * persistence running) confirms no zero, else a fault whose
+       * residuals cross their bands a few ms apart would be taken, for
+       * those ms, for the fault that leaves the late one at zero */
+      zero = (uint16_t)(zero | b);
+    } else {
+      /* unknown: in none of the masks */
+    }
+    if ((st == CANFDI_DIAG_SYM_POS) || (st == CANFDI_DIAG_SYM_NEG)) {
+      w = (uint32_t)canfdi_clamp_s32(abs_sat(d->x_q16[c][j]), Q16_ONE, d->cfg.weight_cap_q16);
+    }
+    d->w_q16[j] = w;
+  }
+  d->obs_pos = pos;
+  d->obs_neg = neg;
+  d->obs_zero = zero;
+}
+
+/*
+ * One rule with polarity pol (+1/-1) against the observed masks. Returns
+ * true for a candidate (every necessary entry seen and matched, at least
+ * one entry evaluated) with its confidence in *pct. Sums: <= 10 entries x
+ * 2 x 16.0 in Q16.16 < 2^22; x 100 < 2^29.
+ */
+static bool eval_rule(const canfdi_diagnosis_t *d, const canfdi_diagnosis_rule_t *m, int8_t pol, uint32_t *pct)
+{
+  const uint32_t want_p = (pol > 0) ? m->pos : m->neg;
+  const uint32_t want_n = (pol > 0) ? m->neg : m->pos;
+  const uint32_t hit = (want_p & d->obs_pos) | (want_n & d->obs_neg) | (m->zero & d->obs_zero);
+  const uint32_t seen = m->care & (uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero);
+  bool cand = ((m->nec & ~hit) == 0U) && (seen != 0U);
+  if (cand) {
+    uint32_t tot = 0U;
+    uint32_t match = 0U;
+    uint32_t j;
+    for (j = 0U; j < CANFDI_DIAG_N_CH; j++) {
+      const uint32_t b = 1UL << j;
+      if ((seen & b) != 0U) {
+        const uint32_t w = d->w_q16[j] << (((m->nec & b) != 0U) ? 1U : 0U);
+        tot += w;
+        if ((hit & b) != 0U) {
+          match += w;
+        }
+      }
+    }
+    *pct = (match * 100U) / tot;
+  }
+  return cand;
+}
+
+/* Best and second candidate of component c (model rules), into res. */
+static void rank(canfdi_diagnosis_t *d, uint32_t c)
+{
+  canfdi_diagnosis_result_t *res = &d->res[c];
+  uint32_t i;
+  res->best = 0U;
+  res->best_pct = 0U;
+  res->second = 0U;
+  res->second_pct = 0U;
+  for (i = 0U; i < N_MODEL_RULES; i++) {
+    const rule_t *r = &model_rules[i];
+    if (r->comp == c) {
+      uint32_t pct = 0U;
+      uint32_t p2 = 0U;
+      bool cand = eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &pct);
+      if ((r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &p2)) {
+        if (!cand || (p2 > pct)) {
+          pct = p2;
+        }
+        cand = true;
+      }
+      if (cand) {
+        if ((res->best == 0U) || (pct > res->best_pct)) {
+          res->second = res->best;
+          res->second_pct = res->best_pct;
+          res->best = r->fault;
+          res->best_pct = (uint8_t)pct;
+        } else if ((res->second == 0U) || (pct > res->second_pct)) {
+          res->second = r->fault;
+          res->second_pct = (uint8_t)pct;
+        } else {
+          /* third or worse */
+        }
+      }
+    }
+  }
+}
+
+/* Necessary channels of rule i all seen: its test can run. */
+static bool rule_testable(const canfdi_diagnosis_t *d, uint32_t i)
+{
+  return (d->rule[i].nec & ~(uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero)) == 0U;
+}
+
+static uint32_t sat_inc(uint32_t x)
+{
+  return (x < UINT32_MAX) ? (x + 1U) : x;
+}
+
+static void fill_none(int8_t report[])
+{
+  uint32_t i;
+  for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+    report[i] = CANFDI_DIAG_REPORT_NONE;
+  }
+}
+
+void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
+{
+  uint8_t hv[CANFDI_FAULT_COUNT]; /* hard-rule verdict per fault, V_* */
+  uint8_t mv[CANFDI_FAULT_COUNT]; /* model-rule verdict per fault */
+  bool hard_any[CANFDI_DIAG_N_COMP] = {false, false};
+  uint32_t f;
+  uint32_t i;
+  uint32_t c;
+  if ((d == NULL) || !d->initialised || (s == NULL)) {
+    if ((d != NULL) && d->initialised) {
+      d->diag.rejected = sat_inc(d->diag.rejected);
+    }
+    if (report != NULL) {
+      fill_none(report);
+    }
+  } else {
+    d->diag.steps = sat_inc(d->diag.steps);
+    update_channels(d, s);
+    f = flags_now(d);
+    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+      hv[i] = V_NA;
+      mv[i] = V_NA;
+    }
+    for (i = 0U; i < N_HARD_RULES; i++) {
+      const hard_rule_t *h = &hard_rules[i];
+      if (hard_fires(h, f)) {
+        hv[h->fault] = V_FAIL;
+        hard_any[h->comp] = true;
+      } else {
+        hv[h->fault] = V_PASS;
+      }
+    }
+    for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+      canfdi_diagnosis_result_t *res = &d->res[c];
+      const uint8_t prev_isolated = res->isolated;
+      const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (hv[prev_isolated] == V_FAIL);
+      uint8_t hard_id = 0U;
+      for (i = 0U; i < N_HARD_RULES; i++) {
+        if ((hard_rules[i].comp == c) && (hv[hard_rules[i].fault] == V_FAIL) && (hard_id == 0U)) {
+          hard_id = hard_rules[i].fault;
+        }
+      }
+      observe(d, c);
+      res->detected = hard_any[c] || ((d->obs_pos | d->obs_neg) != 0U);
+      if (hard_any[c]) {
+        /* the flagged fault breaks the models' assumptions: no model verdicts */
+        res->best = hard_id;
+        res->best_pct = 100U;
+        res->second = 0U;
+        res->second_pct = 0U;
+        res->isolated = hard_id;
+        res->confidence_pct = 100U;
+        res->not_isolated = false;
+        d->win_n[c] = 0U;
+        d->win_id[c] = 0U;
+        if (!prev_hard) {
+          d->diag.hard_fires = sat_inc(d->diag.hard_fires);
+        }
+        for (i = 0U; i < N_MODEL_RULES; i++) {
+          if (model_rules[i].comp == c) {
+            mv[model_rules[i].fault] = V_NONE;
+          }
+        }
+      } else if (!res->detected) {
+        res->best = 0U;
+        res->best_pct = 0U;
+        res->second = 0U;
+        res->second_pct = 0U;
+        res->isolated = 0U;
+        res->confidence_pct = 0U;
+        res->not_isolated = false;
+        d->win_n[c] = 0U;
+        d->win_id[c] = 0U;
+        for (i = 0U; i < N_MODEL_RULES; i++) {
+          if (model_rules[i].comp == c) {
+            mv[model_rules[i].fault] = rule_testable(d, i) ? V_PASS : V_NONE;
+          }
+        }
+      } else {
+        uint8_t winner = 0U;
+        rank(d, c);
+        if ((res->best != 0U) && (res->best_pct >= d->cfg.conf_min_pct) &&
+            (((uint32_t)res->best_pct) >= ((uint32_t)res->second_pct + d->cfg.margin_pct))) {
+          winner = res->best;
+        }
+        if ((winner != 0U) && (winner == d->win_id[c])) {
+          if (d->win_n[c] < UINT16_MAX) {
+            d->win_n[c]++;
+          }
+        } else {
+          d->win_id[c] = winner;
+          d->win_n[c] = (winner != 0U) ? 1U : 0U;
+        }
+        if ((winner != 0U) && (d->win_n[c] >= d->cfg.isolate_steps)) {
+          res->isolated = winner;
+          res->confidence_pct = res->best_pct;
+          if (prev_isolated != winner) {
+            d->diag.isolations = sat_inc(d->diag.isolations);
+          }
+        } else {
+          res->isolated = 0U;
+          res->confidence_pct = 0U;
+        }
+        res->not_isolated = (res->isolated == 0U);
+        if (res->not_isolated) {
+          d->diag.unisolated_steps = sat_inc(d->diag.unisolated_steps);
+        }
+        for (i = 0U; i < N_MODEL_RULES; i++) {
+          if (model_rules[i].comp == c) {
+            mv[model_rules[i].fault] = (model_rules[i].fault == res->isolated) ? V_FAIL : V_NONE;
+          }
+        }
+      }
+    }
+    d->corr_not_isolated = !hard_any[COMP_THR] && (d->res[COMP_THR].isolated == 0U) &&
+                           ((d->ch[COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_POS) ||
+                            (d->ch[COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_NEG));
+    d->failed_mask = 0U;
+    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+      int8_t r = CANFDI_DIAG_REPORT_NONE;
+      if ((hv[i] == V_FAIL) || (mv[i] == V_FAIL)) {
+        r = CANFDI_DIAG_REPORT_FAILED;
+        d->failed_mask |= ((uint32_t)1U << i);
+      } else if (((hv[i] == V_PASS) || (hv[i] == V_NA)) && ((mv[i] == V_PASS) || (mv[i] == V_NA)) &&
+                 ((hv[i] != V_NA) || (mv[i] != V_NA))) {
+        r = CANFDI_DIAG_REPORT_PASSED;
+      } else {
+        /* not tested in this step */
+      }
+      if (report != NULL) {
+        report[i] = r;
+      }
+    }
+  }
+}
+
+uint8_t canfdi_diagnosis_isolated(const canfdi_diagnosis_t *d, uint8_t component, uint8_t *confidence_pct)
+{
+  const canfdi_diagnosis_result_t *r = canfdi_diagnosis_result(d, component);
+  const uint8_t id = (r != NULL) ? r->isolated : 0U;
+  if (confidence_pct != NULL) {
+    *confidence_pct = (r != NULL) ? r->confidence_pct : 0U;
+  }
+  return id;
+}
+
+const canfdi_diagnosis_result_t *canfdi_diagnosis_result(const canfdi_diagnosis_t *d, uint8_t component)
+{
+  const uint8_t c = comp_of_catalogue(component);
+  const canfdi_diagnosis_result_t *r = NULL;
+  if ((d != NULL) && d->initialised && (c < CANFDI_DIAG_N_COMP)) {
+    r = &d->res[c];
+  }
+  return r;
+}
+
+bool canfdi_diagnosis_corr_not_isolated(const canfdi_diagnosis_t *d)
+{
+  return (d != NULL) && d->initialised && d->corr_not_isolated;
+}
+
+uint32_t canfdi_diagnosis_failed_mask(const canfdi_diagnosis_t *d)
+{
+  return ((d != NULL) && d->initialised) ? d->failed_mask : 0U;
+}
+
+int8_t canfdi_diagnosis_symptom(const canfdi_diagnosis_t *d, uint8_t component, uint8_t channel_idx)
+{
+  const uint8_t c = comp_of_catalogue(component);
+  int8_t s = CANFDI_DIAG_SYM_UNKNOWN;
+  if ((d != NULL) && d->initialised && (c < CANFDI_DIAG_N_COMP) && (channel_idx < CANFDI_DIAG_N_CH)) {
+    s = d->ch[c][channel_idx].state;
+  }
+  return s;
+}
+
+canfdi_diagnosis_diag_t canfdi_diagnosis_diag(const canfdi_diagnosis_t *d)
+{
+  canfdi_diagnosis_diag_t g = {0};
+  if (d != NULL) {
+    g = d->diag;
+  }
+  return g;
+}

@@ -1,0 +1,650 @@
+/*
+ * test_diagnosis.c — fault-symptom reasoning (firmware/diag/canfdi_diagnosis).
+ *
+ * The synthetic symptom vectors below are written from the measured
+ * fault-symptom table (bench/bench_symptoms.c at the catalogue magnitudes:
+ * residual signs where the residual is out of its band most of the time,
+ * relative parameter deviations as measured), not from the rule table of
+ * the module, so a wrong rule fails them. Residual sizes are in units of
+ * the band (1.0 = threshold): the strong ones 2..6, as the bench's
+ * deviations of 40..280 sigma against bands of ~30..60 sigma suggest.
+ * A small deterministic "noise" (+-0.3 band, +-0.2 % on parameters) rides
+ * on every channel so that nothing depends on exact zeros.
+ */
+#include <check.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "diag/canfdi_diagnosis.h"
+#include "unit_main.h"
+
+#define Q16(x) ((int32_t)((x) * 65536.0))
+#define DCM CANFDI_COMPONENT_DC_MOTOR
+#define THR CANFDI_COMPONENT_THROTTLE
+
+typedef struct {
+  const char *name;
+  uint8_t fault;
+  uint8_t component;
+  double dcm_r[4];
+  double dcm_p[4]; /* relative deviations R_A, Psi, J, M_c */
+  double thr_r[4]; /* CORR ARM POS1 POS2 */
+  double thr_p[4]; /* R K spring friction */
+  double uac;
+  uint8_t thr_rn_valid; /* 0 -> 0x0F */
+  uint32_t flags;
+} vec_t;
+
+#define F_UAC CANFDI_SYM_F_DCM_UA_CMD_VALID
+
+/* One row per non-communication fault (model path), then the flag paths and
+ * the negative polarities of the bipolar faults. */
+static const vec_t vecs[] = {
+    /* name              fault                                comp  r1..r4 (DC motor)     R_A     Psi     J       M_c     | throttle residuals | throttle params | uac | valid | flags */
+    {"ra_up", CANFDI_FAULT_DCM_RA_UP, DCM, {3.0, 0, 0.0, 2.5}, {0.20, 0, 0, 0}, {0}, {0}, 0, 0, F_UAC},
+    {"flux_down", CANFDI_FAULT_DCM_FLUX_DOWN, DCM, {-6, 2.0, 1.5, -4}, {0, -0.10, 0, 0}, {0}, {0}, 0, 0, F_UAC},
+    {"dcm_friction", CANFDI_FAULT_DCM_FRICTION_UP, DCM, {0, 1.8, 1.5, 1.3}, {0, 0, 0, 0.042}, {0}, {0}, 0, 0, F_UAC},
+    {"ia_offset", CANFDI_FAULT_DCM_IA_SENSOR_OFFSET, DCM, {-3, 2.5, 2, 0}, {-0.002, -0.026, -0.026, 0.096}, {0}, {0}, 0, 0, F_UAC},
+    {"speed_gain", CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN, DCM, {-4, 0, 0, -3}, {0, -0.048, -0.093, -0.048}, {0}, {0}, 0, 0, F_UAC},
+    {"speed_offset", CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, DCM, {-6, 0, 0, -5}, {-0.006, -0.109, -0.109, -0.111}, {0}, {0}, 0, 0, F_UAC},
+    {"ua_offset", CANFDI_FAULT_DCM_UA_SENSOR_OFFSET, DCM, {5, 0, 0, 4}, {0.004, 0.069, 0.069, 0.068}, {0}, {0}, 4.0, 0, F_UAC},
+    {"bridge_a", CANFDI_FAULT_DCM_BRIDGE_A_DEAD, DCM, {0}, {0, 0, -0.007, -0.134}, {0}, {0}, -8, 0, F_UAC | CANFDI_SYM_F_BRIDGE_A_DEAD},
+    {"bridges", CANFDI_FAULT_DCM_BRIDGES_DEAD, DCM, {0}, {0, 0, -0.007, -0.135}, {0}, {0}, -8, 0,
+     F_UAC | CANFDI_SYM_F_BRIDGE_A_DEAD | CANFDI_SYM_F_BRIDGE_B_DEAD},
+    {"tps1_open", CANFDI_FAULT_THR_TPS1_OPEN, THR, {0}, {0}, {0, 0, 0, 0}, {0}, 0, 0x0A, F_UAC | CANFDI_SYM_F_TPS1_LOW},
+    {"tps1_short", CANFDI_FAULT_THR_TPS1_SHORT, THR, {0}, {0}, {0, 0, 0, 0}, {0}, 0, 0x0A, F_UAC | CANFDI_SYM_F_TPS1_HIGH},
+    {"tps2_open", CANFDI_FAULT_THR_TPS2_OPEN, THR, {0}, {0}, {0, 0, 0, 0}, {0}, 0, 0x06, F_UAC | CANFDI_SYM_F_TPS2_LOW},
+    {"tps2_short", CANFDI_FAULT_THR_TPS2_SHORT, THR, {0}, {0}, {0, 0, 0, 0}, {0}, 0, 0x06, F_UAC | CANFDI_SYM_F_TPS2_HIGH},
+    {"tps1_drift", CANFDI_FAULT_THR_TPS1_DRIFT, THR, {0}, {0}, {5, 0, 4, 0}, {0}, 0, 0, F_UAC},
+    {"tps2_drift", CANFDI_FAULT_THR_TPS2_DRIFT, THR, {0}, {0}, {5, 0, 0, -4}, {0}, 0, 0, F_UAC},
+    {"spring_weak", CANFDI_FAULT_THR_SPRING_WEAK, THR, {0}, {0}, {0, 0, 0.3, 0.3}, {0, 0, -0.215, 0.005}, 0, 0, F_UAC},
+    {"thr_friction", CANFDI_FAULT_THR_FRICTION_UP, THR, {0}, {0}, {0, 0, 0, 0}, {0, 0, 0.02, 0.77}, 0, 0, F_UAC},
+    {"motor_r_up", CANFDI_FAULT_THR_MOTOR_R_UP, THR, {0}, {0}, {0, 2.0, -1.2, -1.2}, {0.50, -0.002, 0, 0}, 0, 0, F_UAC},
+    {"motor_open", CANFDI_FAULT_THR_MOTOR_OPEN, THR, {0}, {0}, {0, 40, -20, -20}, {-3.69, -1.04, -1.04, -1.04}, 0, 0,
+     F_UAC | CANFDI_SYM_F_THR_NO_CURRENT},
+    {"jammed", CANFDI_FAULT_THR_JAMMED, THR, {0}, {0}, {0, 0, 3, 3}, {-0.004, 0.004, 0, 0}, 0, 0,
+     F_UAC | CANFDI_SYM_F_THR_NOT_FOLLOWING},
+    {"both_lost", CANFDI_FAULT_THR_TPS_BOTH_LOST, THR, {0}, {0}, {0}, {0}, 0, 0x02,
+     F_UAC | CANFDI_SYM_F_TPS1_LOW | CANFDI_SYM_F_TPS2_LOW},
+    /* the same faults by another path */
+    {"tps1_outlier", CANFDI_FAULT_THR_TPS1_DRIFT, THR, {0}, {0}, {0, 0, 0, 0}, {0}, 0, 0, F_UAC | CANFDI_SYM_F_TPS1_OUTLIER},
+    {"tps2_outlier", CANFDI_FAULT_THR_TPS2_DRIFT, THR, {0}, {0}, {0, 0, 0, 0}, {0}, 0, 0, F_UAC | CANFDI_SYM_F_TPS2_OUTLIER},
+    {"motor_open_model", CANFDI_FAULT_THR_MOTOR_OPEN, THR, {0}, {0}, {0, 40, -20, -20}, {-3.69, -1.04, -1.04, -1.04}, 0, 0, F_UAC},
+    {"jammed_model", CANFDI_FAULT_THR_JAMMED, THR, {0}, {0}, {0, 0, 3, 3}, {-0.004, 0.004, 0, 0}, 0, 0, F_UAC},
+    /* negative polarities (sensor offsets of the other sign) */
+    {"ia_offset_neg", CANFDI_FAULT_DCM_IA_SENSOR_OFFSET, DCM, {3, -2.5, -2, 0}, {0.002, 0.026, 0.026, -0.096}, {0}, {0}, 0, 0, F_UAC},
+    {"speed_gain_neg", CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN, DCM, {4, 0, 0, 3}, {0, 0.048, 0.098, 0.048}, {0}, {0}, 0, 0, F_UAC},
+    {"speed_offset_neg", CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, DCM, {6, 0, 0, 5}, {0.006, 0.109, 0.109, 0.111}, {0}, {0}, 0, 0, F_UAC},
+    {"ua_offset_neg", CANFDI_FAULT_DCM_UA_SENSOR_OFFSET, DCM, {-5, 0, 0, -4}, {-0.004, -0.069, -0.069, -0.068}, {0}, {0}, -4.0, 0, F_UAC},
+    {"tps1_drift_neg", CANFDI_FAULT_THR_TPS1_DRIFT, THR, {0}, {0}, {-5, 0, -4, 0}, {0}, 0, 0, F_UAC},
+    {"tps2_drift_neg", CANFDI_FAULT_THR_TPS2_DRIFT, THR, {0}, {0}, {-5, 0, 0, 4}, {0}, 0, 0, F_UAC},
+    {"jammed_neg", CANFDI_FAULT_THR_JAMMED, THR, {0}, {0}, {0, 0, -3, -3}, {0.004, -0.004, 0, 0}, 0, 0, F_UAC},
+};
+#define N_VECS (sizeof(vecs) / sizeof(vecs[0]))
+
+/* Deterministic pseudo-noise in [-1, 1). */
+static uint32_t lcg = 12345U;
+static double noise(void)
+{
+  lcg = (lcg * 1664525U) + 1013904223U;
+  return ((double)(lcg >> 8) / 8388608.0) - 1.0;
+}
+
+static void build(canfdi_symptoms_t *s, const vec_t *v, uint32_t k, double rn_noise, double p_noise)
+{
+  uint32_t i;
+  memset(s, 0, sizeof(*s));
+  s->now_ms = k;
+  for (i = 0U; i < 4U; i++) {
+    s->dcm_rn_q16[i] = Q16(v->dcm_r[i] + (rn_noise * noise()));
+    s->thr_rn_q16[i] = Q16(v->thr_r[i] + (rn_noise * noise()));
+    s->dcm_pdev_q16[i] = Q16(v->dcm_p[i] + (p_noise * noise()));
+    s->thr_pdev_q16[i] = Q16(v->thr_p[i] + (p_noise * noise()));
+  }
+  s->dcm_rn_valid = 0x0FU;
+  s->thr_rn_valid = (v->thr_rn_valid != 0U) ? v->thr_rn_valid : 0x0FU;
+  s->dcm_pdev_valid = 0x0FU;
+  s->thr_pdev_valid = 0x0FU;
+  s->dcm_ua_cmd_rn_q16 = Q16(v->uac + (rn_noise * noise()));
+  s->flags = v->flags;
+}
+
+static canfdi_diagnosis_t dg;
+static canfdi_diagnosis_cfg_t cfg;
+static int8_t rep[CANFDI_FAULT_COUNT];
+
+static void setup(void)
+{
+  canfdi_diagnosis_default_cfg(&cfg);
+  ck_assert_int_eq(canfdi_diagnosis_init(&dg, &cfg), CANFDI_OK);
+}
+
+static uint32_t count_failed(void)
+{
+  uint32_t i;
+  uint32_t n = 0U;
+  for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+    n += (rep[i] == CANFDI_DIAG_REPORT_FAILED) ? 1U : 0U;
+  }
+  return n;
+}
+
+static const vec_t fault_free = {"fault_free", 0U, 0U, {0}, {0}, {0}, {0}, 0, 0, F_UAC};
+
+/* ---- isolation over the catalogue ------------------------------------------ */
+
+START_TEST(test_isolates_each_fault)
+{
+  const vec_t *v = &vecs[_i];
+  canfdi_symptoms_t s;
+  uint8_t conf = 0U;
+  uint32_t k;
+  uint32_t first = UINT32_MAX;
+  setup();
+  /* 1 s fault-free, then the fault for 1 s */
+  for (k = 0U; k < 1000U; k++) {
+    build(&s, &fault_free, k, 0.3, 0.002);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_uint_eq(count_failed(), 0U);
+  }
+  for (k = 0U; k < 1000U; k++) {
+    build(&s, v, k, 0.3, 0.002);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    if ((rep[v->fault] == CANFDI_DIAG_REPORT_FAILED) && (first == UINT32_MAX)) {
+      first = k;
+    }
+    if (first != UINT32_MAX) {
+      /* once isolated: exactly that fault, every step */
+      ck_assert_msg(rep[v->fault] == CANFDI_DIAG_REPORT_FAILED, "%s: lost at step %u", v->name, k);
+      ck_assert_msg(count_failed() == 1U, "%s: %u faults FAILED at step %u", v->name, count_failed(), k);
+    }
+  }
+  ck_assert_msg(first != UINT32_MAX, "%s: never isolated (best %u %u%%, second %u %u%%)", v->name,
+                canfdi_diagnosis_result(&dg, v->component)->best,
+                canfdi_diagnosis_result(&dg, v->component)->best_pct,
+                canfdi_diagnosis_result(&dg, v->component)->second,
+                canfdi_diagnosis_result(&dg, v->component)->second_pct);
+  /* latency: symptom persistence + decision persistence (model rules), or
+   * the flag persistence (hard rules) */
+  ck_assert_msg(first <= (uint32_t)(cfg.sym_on_steps + cfg.isolate_steps), "%s: first at %u", v->name, first);
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << v->fault);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, v->component, &conf), v->fault);
+  ck_assert_uint_ge(conf, cfg.conf_min_pct);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, (v->component == DCM) ? THR : DCM, NULL), 0U);
+  ck_assert(!canfdi_diagnosis_corr_not_isolated(&dg));
+  for (k = 22U; k < CANFDI_FAULT_COUNT; k++) {
+    ck_assert_int_eq(rep[k], CANFDI_DIAG_REPORT_NONE);
+  }
+  printf("diagnosis: %-17s -> fault %2u after %2u steps, confidence %3u %% (runner-up %2u at %3u %%)\n",
+         v->name, v->fault, first, conf, canfdi_diagnosis_result(&dg, v->component)->second,
+         canfdi_diagnosis_result(&dg, v->component)->second_pct);
+}
+END_TEST
+
+/* Every non-communication fault id appears in the vector table. */
+START_TEST(test_catalogue_covered)
+{
+  uint32_t f;
+  uint32_t i;
+  for (f = 1U; f < CANFDI_FAULT_COUNT; f++) {
+    bool found = false;
+    if (canfdi_catalogue_fault[f].kind == CANFDI_KIND_COMMUNICATION) {
+      continue;
+    }
+    for (i = 0U; i < N_VECS; i++) {
+      found = found || (vecs[i].fault == f);
+    }
+    ck_assert_msg(found, "fault %u has no test vector", f);
+  }
+}
+END_TEST
+
+/* ---- no false alarms --------------------------------------------------------- */
+
+START_TEST(test_fault_free_passes)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  uint32_t f;
+  setup();
+  for (k = 0U; k < 5000U; k++) {
+    build(&s, &fault_free, k, 0.79, 0.002);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_uint_eq(count_failed(), 0U);
+    ck_assert(!canfdi_diagnosis_result(&dg, DCM)->detected);
+    ck_assert(!canfdi_diagnosis_result(&dg, THR)->detected);
+  }
+  /* every non-communication test ran and passed */
+  for (f = 1U; f < CANFDI_FAULT_COUNT; f++) {
+    const int8_t want = (canfdi_catalogue_fault[f].kind == CANFDI_KIND_COMMUNICATION) ? CANFDI_DIAG_REPORT_NONE
+                                                                                    : CANFDI_DIAG_REPORT_PASSED;
+    ck_assert_msg(rep[f] == want, "fault %u: report %d", f, rep[f]);
+  }
+  ck_assert_int_eq(rep[0], CANFDI_DIAG_REPORT_NONE);
+}
+END_TEST
+
+/* Noise up to just below the threshold on every channel, any sign, and
+ * parameter deviations just inside their thresholds: nothing. */
+START_TEST(test_noise_below_threshold)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  uint32_t i;
+  setup();
+  for (k = 0U; k < 20000U; k++) {
+    build(&s, &fault_free, k, 0.99, 0.0);
+    for (i = 0U; i < 4U; i++) {
+      /* 0.99 of each side's threshold */
+      s.dcm_pdev_q16[i] = (noise() > 0.0) ? (int32_t)(cfg.dcm_par_pos_q16[i] * 99 / 100)
+                                          : -(int32_t)(cfg.dcm_par_neg_q16[i] * 99 / 100);
+      s.thr_pdev_q16[i] = (noise() > 0.0) ? (int32_t)(cfg.thr_par_pos_q16[i] * 99 / 100)
+                                          : -(int32_t)(cfg.thr_par_neg_q16[i] * 99 / 100);
+    }
+    /* J and Psi move together: their difference is a channel of its own
+     * (J/Psi), whose threshold is smaller than theirs */
+    s.dcm_pdev_q16[CANFDI_SYM_DCM_P_J] = s.dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI];
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_uint_eq(count_failed(), 0U);
+    ck_assert(!canfdi_diagnosis_result(&dg, DCM)->detected);
+    ck_assert(!canfdi_diagnosis_result(&dg, THR)->detected);
+  }
+}
+END_TEST
+
+/* Bursts above the threshold shorter than the persistence: nothing; the
+ * same burst one step longer: a symptom. */
+START_TEST(test_transient_burst)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  uint32_t b;
+  setup();
+  for (b = 0U; b < 50U; b++) {
+    for (k = 0U; k < 200U; k++) {
+      build(&s, &vecs[6] /* ua_offset */, k, 0.0, 0.0);
+      if (k >= (uint32_t)(cfg.sym_on_steps - 1U)) {
+        build(&s, &fault_free, k, 0.0, 0.0);
+      }
+      canfdi_diagnosis_step(&dg, &s, rep);
+      ck_assert_uint_eq(count_failed(), 0U);
+      ck_assert(!canfdi_diagnosis_result(&dg, DCM)->detected);
+    }
+  }
+  for (k = 0U; k < cfg.sym_on_steps; k++) {
+    build(&s, &vecs[6], k, 0.0, 0.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert(canfdi_diagnosis_result(&dg, DCM)->detected);
+  ck_assert_int_eq(canfdi_diagnosis_symptom(&dg, DCM, CANFDI_SYM_DCM_R1), CANFDI_DIAG_SYM_POS);
+}
+END_TEST
+
+/* A cold winding (R_A 1.35 of the warm 1.52 Ohm: -11 %) is not a fault. */
+START_TEST(test_cold_winding)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 2000U; k++) {
+    build(&s, &fault_free, k, 0.3, 0.002);
+    s.dcm_pdev_q16[CANFDI_SYM_DCM_P_RA] = Q16(-0.112);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_uint_eq(count_failed(), 0U);
+  }
+  ck_assert(!canfdi_diagnosis_result(&dg, DCM)->detected);
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_RA_UP], CANFDI_DIAG_REPORT_PASSED);
+}
+END_TEST
+
+/* ---- timing ------------------------------------------------------------------ */
+
+START_TEST(test_latency_exact)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  uint32_t first = UINT32_MAX;
+  setup();
+  for (k = 0U; k < 200U; k++) {
+    build(&s, &vecs[6], k, 0.0, 0.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    if ((rep[CANFDI_FAULT_DCM_UA_SENSOR_OFFSET] == CANFDI_DIAG_REPORT_FAILED) && (first == UINT32_MAX)) {
+      first = k;
+    }
+  }
+  /* symptoms become + on step sym_on - 1 (0-based), the win count starts
+   * there and reaches isolate_steps isolate_steps - 1 steps later */
+  ck_assert_uint_eq(first, (uint32_t)(cfg.sym_on_steps + cfg.isolate_steps - 2U));
+  /* fault gone: the isolation drops when the symptoms have gone (off
+   * persistence), and the tests pass again */
+  first = UINT32_MAX;
+  for (k = 0U; k < 200U; k++) {
+    build(&s, &fault_free, k, 0.0, 0.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    if ((rep[CANFDI_FAULT_DCM_UA_SENSOR_OFFSET] == CANFDI_DIAG_REPORT_PASSED) && (first == UINT32_MAX)) {
+      first = k;
+    }
+  }
+  ck_assert_uint_eq(first, (uint32_t)(cfg.sym_off_steps - 1U));
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, DCM, NULL), 0U);
+}
+END_TEST
+
+/* ---- ambiguity ----------------------------------------------------------------- */
+
+typedef struct {
+  const char *name;
+  vec_t v;
+  uint8_t component;
+} amb_t;
+
+static const amb_t ambiguous[] = {
+    /* U_A or omega offset, no U_A-vs-command channel: the armature equation
+     * cannot tell them apart */
+    {"ua_or_w_offset_no_uac", {"", 0, 0, {5, 0, 0, 4}, {0.004, 0.069, 0.069, 0.068}, {0}, {0}, 0, 0, 0}, DCM},
+    /* r1/r4 before the estimators moved: R_A up, U_A offset or omega offset */
+    {"r1_r4_only", {"", 0, 0, {3, 0, 0, 2.5}, {0, 0, 0, 0}, {0}, {0}, 0, 0, F_UAC}, DCM},
+    /* TPS correlation with both position residuals out (slow drift with
+     * frequent strokes, parity header): P2135 */
+    {"corr_both_pos", {"", 0, 0, {0}, {0}, {5, 0, 4, 4}, {0}, 0, 0, F_UAC}, THR},
+    /* correlation only, position residuals not valid */
+    {"corr_no_pos", {"", 0, 0, {0}, {0}, {5, 0, 0, 0}, {0}, 0, 0x03, F_UAC}, THR},
+    /* a residual pattern no fault of the catalogue produces (r2 alone) */
+    {"r2_alone", {"", 0, 0, {0, 3, 0, 0}, {0}, {0}, {0}, 0, 0, F_UAC}, DCM},
+};
+#define N_AMB (sizeof(ambiguous) / sizeof(ambiguous[0]))
+
+START_TEST(test_not_isolated)
+{
+  const amb_t *a = &ambiguous[_i];
+  canfdi_symptoms_t s;
+  uint32_t k;
+  uint32_t f;
+  setup();
+  for (k = 0U; k < 1000U; k++) {
+    build(&s, &a->v, k, 0.3, 0.002);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_msg(count_failed() == 0U, "%s: FAILED reported", a->name);
+  }
+  ck_assert(canfdi_diagnosis_result(&dg, a->component)->detected);
+  ck_assert(canfdi_diagnosis_result(&dg, a->component)->not_isolated);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, a->component, NULL), 0U);
+  /* every model test of the component: not decided */
+  for (f = 1U; f < 22U; f++) {
+    if ((canfdi_catalogue_fault[f].component == a->component) &&
+        ((canfdi_catalogue_fault[f].kind == CANFDI_KIND_PARAMETRIC) ||
+         (f == CANFDI_FAULT_DCM_IA_SENSOR_OFFSET) || (f == CANFDI_FAULT_DCM_UA_SENSOR_OFFSET))) {
+      ck_assert_msg(rep[f] == CANFDI_DIAG_REPORT_NONE, "%s: fault %u report %d", a->name, f, rep[f]);
+    }
+  }
+  ck_assert(canfdi_diagnosis_corr_not_isolated(&dg) == (a->v.thr_r[0] > 1.0));
+  ck_assert_uint_gt(canfdi_diagnosis_diag(&dg).unisolated_steps, 0U);
+}
+END_TEST
+
+/* ---- structure --------------------------------------------------------------- */
+
+/* A fired hard rule masks the model rules of its component (bridge A dead
+ * with a residual pattern as well): only the flagged fault. */
+START_TEST(test_hard_masks_model)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 200U; k++) {
+    build(&s, &vecs[6], k, 0.3, 0.002);
+    s.flags |= CANFDI_SYM_F_BRIDGE_A_DEAD;
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_BRIDGE_A_DEAD], CANFDI_DIAG_REPORT_FAILED);
+  ck_assert_uint_eq(count_failed(), 1U);
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_UA_SENSOR_OFFSET], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_BRIDGES_DEAD], CANFDI_DIAG_REPORT_PASSED);
+  ck_assert_uint_eq(canfdi_diagnosis_diag(&dg).hard_fires, 1U);
+}
+END_TEST
+
+/* The two plants are diagnosed independently: one fault in each. */
+START_TEST(test_two_components)
+{
+  canfdi_symptoms_t s;
+  canfdi_symptoms_t t;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 300U; k++) {
+    build(&s, &vecs[0] /* ra_up */, k, 0.3, 0.002);
+    build(&t, &vecs[14] /* tps2_drift */, k, 0.3, 0.002);
+    memcpy(s.thr_rn_q16, t.thr_rn_q16, sizeof(s.thr_rn_q16));
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg),
+                    (1UL << CANFDI_FAULT_DCM_RA_UP) | (1UL << CANFDI_FAULT_THR_TPS2_DRIFT));
+}
+END_TEST
+
+/* An intermittent zero-mean r3 (R_A up in transients) does not hide R_A up. */
+START_TEST(test_intermittent_dont_care)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 1000U; k++) {
+    build(&s, &vecs[0], k, 0.3, 0.002);
+    s.dcm_rn_q16[CANFDI_SYM_DCM_R3] = (((k / 40U) % 2U) == 0U) ? Q16(3.0) : Q16(-3.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_RA_UP);
+}
+END_TEST
+
+START_TEST(test_reset_and_invalid)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 200U; k++) {
+    build(&s, &vecs[0], k, 0.0, 0.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, DCM, NULL), CANFDI_FAULT_DCM_RA_UP);
+  canfdi_diagnosis_reset(&dg);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, DCM, NULL), 0U);
+  ck_assert_int_eq(canfdi_diagnosis_symptom(&dg, DCM, 0U), CANFDI_DIAG_SYM_UNKNOWN);
+  /* invalid residuals: nothing testable, nothing reported */
+  build(&s, &vecs[0], 0U, 0.0, 0.0);
+  s.dcm_rn_valid = 0U;
+  s.dcm_pdev_valid = 0U;
+  s.flags = 0U;
+  canfdi_diagnosis_step(&dg, &s, rep);
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_RA_UP], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_BRIDGE_A_DEAD], CANFDI_DIAG_REPORT_PASSED);
+  /* NULL arguments */
+  memset(rep, 5, sizeof(rep));
+  canfdi_diagnosis_step(&dg, NULL, rep);
+  for (k = 0U; k < CANFDI_FAULT_COUNT; k++) {
+    ck_assert_int_eq(rep[k], CANFDI_DIAG_REPORT_NONE);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_diag(&dg).rejected, 1U);
+  canfdi_diagnosis_step(NULL, &s, rep);
+  canfdi_diagnosis_step(&dg, &s, NULL);
+  canfdi_diagnosis_reset(NULL);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(NULL, DCM, NULL), 0U);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, CANFDI_COMPONENT_COMM, NULL), 0U);
+  ck_assert_ptr_null(canfdi_diagnosis_result(&dg, 7U));
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(NULL), 0U);
+  ck_assert(!canfdi_diagnosis_corr_not_isolated(NULL));
+  ck_assert_int_eq(canfdi_diagnosis_symptom(&dg, DCM, CANFDI_DIAG_N_CH), CANFDI_DIAG_SYM_UNKNOWN);
+  ck_assert_uint_eq(canfdi_diagnosis_diag(NULL).steps, 0U);
+  canfdi_diagnosis_default_cfg(NULL);
+}
+END_TEST
+
+
+
+/* Flux down as measured on the rig: r1..r3 cross their bands at once, r4
+ * (the residual that tells flux from an I_A offset) 25 ms later. The I_A
+ * offset rule (r4 necessarily zero) must not win in between, because r4's
+ * persistence is already running; then flux is isolated. */
+START_TEST(test_lagging_residual)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 500U; k++) {
+    build(&s, &vecs[1] /* flux_down */, k, 0.3, 0.002);
+    if (k < 25U) {
+      s.dcm_rn_q16[CANFDI_SYM_DCM_R4] = Q16(0.2);
+    }
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_msg(rep[CANFDI_FAULT_DCM_IA_SENSOR_OFFSET] != CANFDI_DIAG_REPORT_FAILED, "I_A offset at step %u", k);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_FLUX_DOWN);
+}
+END_TEST
+
+/* ---- partial patterns: supporting symptoms missing or contradicting -------- */
+
+/* Measured "weaker" cases of the bench (a supporting symptom below its band
+ * part of the time): still isolated, with a confidence below 100 % that
+ * falls as the contradicting symptom grows. */
+static const vec_t partial[] = {
+    /* R_A up with r4 inside its band */
+    {"ra_up_no_r4", CANFDI_FAULT_DCM_RA_UP, DCM, {3.0, 0, 0, 0.2}, {0.20, 0, 0, 0}, {0}, {0}, 0, 0, F_UAC},
+    /* incipient R_A up absorbed by the parity tracker: parameter only */
+    {"ra_up_param_only", CANFDI_FAULT_DCM_RA_UP, DCM, {0.2, 0, 0, 0.2}, {0.10, 0, 0, 0}, {0}, {0}, 0, 0, F_UAC},
+    /* DC friction +20 %: r4 weak, M_c +1.6 % below its 3 % */
+    {"dcm_friction_20", CANFDI_FAULT_DCM_FRICTION_UP, DCM, {0, 1.5, 1.3, 0.5}, {0, 0, 0, 0.016}, {0}, {0}, 0, 0, F_UAC},
+    /* throttle motor R +10 %: ARM mostly in band */
+    {"motor_r_up_10", CANFDI_FAULT_THR_MOTOR_R_UP, THR, {0}, {0}, {0, 0.4, -0.1, -0.1}, {0.10, -0.001, 0, 0}, 0, 0, F_UAC},
+};
+#define N_PARTIAL (sizeof(partial) / sizeof(partial[0]))
+
+START_TEST(test_partial_pattern)
+{
+  const vec_t *v = &partial[_i];
+  canfdi_symptoms_t s;
+  uint8_t conf = 0U;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 500U; k++) {
+    build(&s, v, k, 0.3, 0.002);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_msg(canfdi_diagnosis_failed_mask(&dg) == (1UL << v->fault), "%s: mask %x best %u %u%% second %u %u%%",
+                v->name, canfdi_diagnosis_failed_mask(&dg), canfdi_diagnosis_result(&dg, v->component)->best,
+                canfdi_diagnosis_result(&dg, v->component)->best_pct,
+                canfdi_diagnosis_result(&dg, v->component)->second,
+                canfdi_diagnosis_result(&dg, v->component)->second_pct);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, v->component, &conf), v->fault);
+  ck_assert_uint_lt(conf, 100U);
+  ck_assert_uint_ge(conf, cfg.conf_min_pct);
+  printf("diagnosis: %-17s -> fault %2u, confidence %3u %%\n", v->name, v->fault, conf);
+}
+END_TEST
+
+/* A supporting '0' contradicted by a growing symptom lowers the confidence
+ * monotonically (weight = its size, capped), and at the cap the rule is no
+ * longer accepted when conf_min is raised to 80 %. Throttle motor R up
+ * ("Z+.. P0..") with a growing K deviation (K threshold 10 %). */
+START_TEST(test_confidence_monotone)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  uint32_t m;
+  uint8_t last = 101U;
+  const vec_t *v = &vecs[17]; /* motor_r_up */
+  ck_assert_uint_eq(v->fault, CANFDI_FAULT_THR_MOTOR_R_UP);
+  for (m = 0U; m < 6U; m++) {
+    const double kdev = 0.1 * (0.5 + (0.75 * (double)m)); /* 0.5 .. 4.25 thresholds */
+    setup();
+    for (k = 0U; k < 300U; k++) {
+      build(&s, v, k, 0.0, 0.0);
+      s.thr_pdev_q16[CANFDI_SYM_THR_P_K] = Q16(kdev);
+      canfdi_diagnosis_step(&dg, &s, rep);
+    }
+    ck_assert_uint_eq(canfdi_diagnosis_result(&dg, THR)->best, CANFDI_FAULT_THR_MOTOR_R_UP);
+    if (m == 0U) {
+      ck_assert_uint_eq(canfdi_diagnosis_result(&dg, THR)->best_pct, 100U);
+    } else {
+      ck_assert_uint_lt(canfdi_diagnosis_result(&dg, THR)->best_pct, last);
+    }
+    last = canfdi_diagnosis_result(&dg, THR)->best_pct;
+  }
+  ck_assert_uint_lt(last, 80U);
+  cfg.conf_min_pct = 80U;
+  ck_assert_int_eq(canfdi_diagnosis_init(&dg, &cfg), CANFDI_OK);
+  for (k = 0U; k < 300U; k++) {
+    build(&s, v, k, 0.0, 0.0);
+    s.thr_pdev_q16[CANFDI_SYM_THR_P_K] = Q16(0.425);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 0U);
+  ck_assert(canfdi_diagnosis_result(&dg, THR)->not_isolated);
+}
+END_TEST
+
+/* ---- configuration ------------------------------------------------------------ */
+
+static void bad_off(canfdi_diagnosis_cfg_t *c) { c->off_q16 = c->on_q16 + 1; }
+static void bad_off0(canfdi_diagnosis_cfg_t *c) { c->off_q16 = 0; }
+static void bad_cap(canfdi_diagnosis_cfg_t *c) { c->weight_cap_q16 = Q16(0.5); }
+static void bad_steps(canfdi_diagnosis_cfg_t *c) { c->sym_on_steps = 0U; }
+static void bad_iso(canfdi_diagnosis_cfg_t *c) { c->isolate_steps = 10001U; }
+static void bad_conf(canfdi_diagnosis_cfg_t *c) { c->conf_min_pct = 101U; }
+static void bad_par(canfdi_diagnosis_cfg_t *c) { c->thr_par_neg_q16[2] = 0; }
+static void bad_jpsi(canfdi_diagnosis_cfg_t *c) { c->jpsi_q16 = Q16(11.0); }
+
+static void (*const bad_cfgs[])(canfdi_diagnosis_cfg_t *) = {bad_off, bad_off0, bad_cap, bad_steps,
+                                                              bad_iso, bad_conf, bad_par, bad_jpsi};
+
+START_TEST(test_cfg_rejected)
+{
+  canfdi_diagnosis_cfg_t c;
+  canfdi_symptoms_t s;
+  canfdi_diagnosis_default_cfg(&c);
+  ck_assert_int_eq(canfdi_diagnosis_cfg_check(&c), CANFDI_OK);
+  bad_cfgs[_i](&c);
+  ck_assert_int_eq(canfdi_diagnosis_cfg_check(&c), -CANFDI_EINVAL);
+  ck_assert_int_eq(canfdi_diagnosis_init(&dg, &c), -CANFDI_EINVAL);
+  build(&s, &vecs[0], 0U, 0.0, 0.0);
+  memset(rep, 5, sizeof(rep));
+  canfdi_diagnosis_step(&dg, &s, rep);
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_RA_UP], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(canfdi_diagnosis_init(NULL, &c), -CANFDI_EINVAL);
+  ck_assert_int_eq(canfdi_diagnosis_init(&dg, NULL), -CANFDI_EINVAL);
+}
+END_TEST
+
+static Suite *make_suite(void)
+{
+  Suite *s = suite_create("diagnosis");
+  TCase *tc = tcase_create("isolation");
+  tcase_add_loop_test(tc, test_isolates_each_fault, 0, (int)N_VECS);
+  tcase_add_test(tc, test_catalogue_covered);
+  tcase_add_test(tc, test_two_components);
+  tcase_add_test(tc, test_intermittent_dont_care);
+  tcase_add_test(tc, test_hard_masks_model);
+  tcase_add_loop_test(tc, test_partial_pattern, 0, (int)N_PARTIAL);
+  tcase_add_test(tc, test_confidence_monotone);
+  tcase_add_test(tc, test_lagging_residual);
+  suite_add_tcase(s, tc);
+  tc = tcase_create("false_alarms");
+  tcase_add_test(tc, test_fault_free_passes);
+  tcase_add_test(tc, test_noise_below_threshold);
+  tcase_add_test(tc, test_transient_burst);
+  tcase_add_test(tc, test_cold_winding);
+  suite_add_tcase(s, tc);
+  tc = tcase_create("timing");
+  tcase_add_test(tc, test_latency_exact);
+  suite_add_tcase(s, tc);
+  tc = tcase_create("ambiguity");
+  tcase_add_loop_test(tc, test_not_isolated, 0, (int)N_AMB);
+  suite_add_tcase(s, tc);
+  tc = tcase_create("api");
+  tcase_add_test(tc, test_reset_and_invalid);
+  tcase_add_loop_test(tc, test_cfg_rejected, 0, (int)(sizeof(bad_cfgs) / sizeof(bad_cfgs[0])));
+  suite_add_tcase(s, tc);
+  return s;
+}
+
+CANFDI_UNIT_MAIN(make_suite)
