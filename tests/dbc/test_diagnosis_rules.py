@@ -122,6 +122,8 @@ def candidate(rule: dict, meas: list[str]) -> bool:
 
 def _load():
     if not TABLE.exists():
+        if os.environ.get("CANFDI_REQUIRE_SYMPTOMS"):
+            pytest.fail(f"{TABLE} missing although make diag-rules-test built it")
         pytest.skip(f"{TABLE} not built (make bench-symptoms)")
     return json.loads(TABLE.read_text())
 
