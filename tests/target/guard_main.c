@@ -46,6 +46,8 @@
 #include "ctrl/canfdi_excite.h"
 #include "ctrl/canfdi_pi.h"
 
+#include "app/canfdi_app.h"
+
 /* Inputs the compiler cannot know. */
 static volatile int16_t in_s16[2];
 static volatile int32_t in_s32[3];
@@ -726,6 +728,68 @@ static void guard_tx(void)
   sinku64((uint64_t)fr.data[0] + out[0].data[7] + tx.diag.saturations);
 }
 
+/* The application (firmware/app): its whole state is one static instance,
+ * so the image's .bss shows the RAM the product needs. */
+static void guard_app(void)
+{
+  static canfdi_app_t app;
+  static canfdi_app_cal_t cal;
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint8_t frame[8];
+  const canfdi_app_diag_t *d;
+
+  for (unsigned i = 0U; i < 8U; i++) {
+    frame[i] = in_frame[i];
+  }
+  canfdi_app_default_cal(&cal);
+  sink32(canfdi_app_init(&app, &cal, in_u32));
+  sink32(canfdi_app_rx_frame(&app, in_u32, frame, (uint8_t)in_n, in_u32));
+  sink32(canfdi_app_step(&app, in_u32, out));
+  canfdi_app_deadline_miss(&app);
+  sinku64((uint64_t)canfdi_app_dtc(&app)->changes);
+  d = canfdi_app_diag(&app);
+  sinku64((uint64_t)d->steps + d->deadline_misses + out[0].data[0]);
+}
+
+/* Fault-symptom reasoning (firmware/diag/canfdi_diagnosis). */
+#include "diag/canfdi_diagnosis.h"
+
+static void guard_diagnosis(void)
+{
+  static canfdi_diagnosis_t dg;
+  canfdi_diagnosis_cfg_t cfg;
+  canfdi_symptoms_t sym;
+  int8_t rep[CANFDI_FAULT_COUNT];
+  uint8_t conf = 0U;
+  const canfdi_diagnosis_result_t *res;
+
+  canfdi_diagnosis_default_cfg(&cfg);
+  sink32(canfdi_diagnosis_cfg_check(&cfg));
+  sink32(canfdi_diagnosis_init(&dg, &cfg));
+  for (unsigned i = 0U; i < CANFDI_SYM_N_RES; i++) {
+    sym.dcm_rn_q16[i] = in_s32[i % 3U];
+    sym.thr_rn_q16[i] = in_s32[(i + 1U) % 3U];
+    sym.dcm_pdev_q16[i] = in_s32[(i + 2U) % 3U];
+    sym.thr_pdev_q16[i] = in_s32[i % 3U];
+  }
+  sym.now_ms = in_u32;
+  sym.dcm_rn_valid = (uint8_t)in_n;
+  sym.thr_rn_valid = (uint8_t)in_n;
+  sym.dcm_pdev_valid = (uint8_t)in_n;
+  sym.thr_pdev_valid = (uint8_t)in_n;
+  sym.flags = in_u32;
+  sym.thr_track_err_rad_q16 = in_s32[0];
+  sym.dcm_ua_cmd_rn_q16 = in_s32[1];
+  canfdi_diagnosis_step(&dg, &sym, rep);
+  sinku64((uint64_t)canfdi_diagnosis_isolated(&dg, CANFDI_COMPONENT_DC_MOTOR, &conf) + conf);
+  res = canfdi_diagnosis_result(&dg, CANFDI_COMPONENT_THROTTLE);
+  sinku64((uint64_t)((res != NULL) ? res->best : 0U));
+  sinku64((uint64_t)canfdi_diagnosis_corr_not_isolated(&dg) + canfdi_diagnosis_failed_mask(&dg));
+  sink32(canfdi_diagnosis_symptom(&dg, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)in_n));
+  sinku64((uint64_t)canfdi_diagnosis_diag(&dg).steps + (uint64_t)(uint8_t)rep[in_n % CANFDI_FAULT_COUNT]);
+  canfdi_diagnosis_reset(&dg);
+}
+
 int main(void)
 {
   guard_fixp();
@@ -749,5 +813,7 @@ int main(void)
   guard_rx();
   guard_tx();
   guard_generated();
+  guard_app();
+  guard_diagnosis();
   return 0;
 }

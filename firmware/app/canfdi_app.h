@@ -1,0 +1,189 @@
+/*
+ * canfdi_app.h — the supervisor application: one 1 ms step over statically
+ * allocated state that closes both control loops, supervises its inputs and
+ * both plants, names the fault, remembers it and keeps the plants safe.
+ *
+ * Ports. Frames in: canfdi_app_rx_frame() for every received CAN frame
+ * (any id; the input supervision judges it). Frames out: canfdi_app_step()
+ * writes the frames to send in this step into the caller's buffer
+ * (CANFDI_APP_MAX_TX frames). Nothing else crosses the boundary: the same
+ * core runs in SIL (tests/sil), on SocketCAN and on a microcontroller.
+ *
+ * Order inside one step (canfdi_app_step):
+ *   1. input supervision  canfdi_rx_step: validated inputs, U-code monitors
+ *   2. range checks       canfdi_limit on TPS1/TPS2 (raw symptom excludes
+ *                         the sensor from the vote at once)
+ *   3. voting             canfdi_vote over TPS1, TPS2 and the throttle
+ *                         observer's angle of the previous step
+ *   4. control            ctrl_dcm (speed), ctrl_thr (position) + excitation,
+ *                         in the mode the actuator manager set last step
+ *   5. detection          parity_dcm, parity_thr (residuals), est_dcm,
+ *                         est_thr (parameters; their RLS updates are
+ *                         decimated inside the modules)
+ *   6. symptoms           canfdi_symptoms_t
+ *   7. diagnosis          canfdi_diagnosis_step: report per fault id
+ *   8. DTC memory         diagnosis, manager and rx monitors -> canfdi_dtc,
+ *                         freeze frame of the key signals
+ *   9. fault tolerance    canfdi_actmgr (bridges, limp-home, degradation)
+ *  10. outputs            canfdi_tx: actuators every step, residuals 10 ms,
+ *                         status / diagnosis / DTC / parameters 100 ms, DTC
+ *                         status changes on change
+ * The models use the command applied in the previous step (the voltage the
+ * bridge held over the interval that ends with this sample).
+ *
+ * Faults given to the manager: the catalogue ids whose trouble code has
+ * testFailed set (qualified by the DTC memory's debouncing), plus the ids
+ * the diagnosis reports FAILED this step, plus what the manager detected
+ * itself. The manager's degradation ratchet keeps them latched.
+ *
+ * Scaling and overflow: all signals Q16.16 SI (see the modules); the app
+ * adds only conversions by the modules' own helpers and saturating
+ * arithmetic (canfdi_fixp.h). Normalised parameter deviations
+ * (est - nom) / nom are formed with canfdi_div_s32_qn (saturating).
+ *
+ * Cost per canfdi_app_step, executed instructions measured on QEMU
+ * mps2-an386 with -icount (SysTick), arm-none-eabi-gcc 12 -Os, over the
+ * 24 000 steps of the SIL demo (tests/sil/scenarios/demo.scn: fault-free
+ * phase, TPS drift, R_A fault, bridge switchover, limp-home), `make sil-pil`
+ * (the M0+ code runs on the same emulated core: instruction counts, not
+ * cycles):
+ *                      min      mean     max
+ *   Cortex-M4          29 900   43 700   70 700
+ *   Cortex-M0+ code    52 800   82 900  131 900
+ * The model layer dominates (parity_dcm, parity_thr, est_dcm, est_thr: SVFs
+ * every step, RLS updates decimated inside the modules); the max was seen
+ * just after the limp-home transition of the demo (20.1..20.2 s).
+ * A 1 ms step therefore needs a Cortex-M4 of roughly 100 MHz or more with
+ * margin; on a Cortex-M0+ at 48 MHz it does not fit (raise the estimators'
+ * decim, or run them in a slower task). Host (x86-64, gcc -O2, callgrind):
+ * 30..32 k instructions per step on average (`make sil-bench`). The same
+ * run shows the ECU's frames bit-identical between the host build and both
+ * target builds.
+ * Memory: sizeof(canfdi_app_t) = 9136 bytes on Cortex-M0+/M4 (924 of them
+ * the calibration copy), all of the application's RAM (static; `make
+ * firmware` shows it in .bss); code ~5.4 kB for this module (M0+, -Os) on
+ * top of the modules it calls. Stack: canfdi_app_step 296 bytes (M0+,
+ * -fstack-usage, helpers inlined) plus the deepest module it calls. No heap.
+ */
+#ifndef CANFDI_APP_H
+#define CANFDI_APP_H
+
+#include "comm/canfdi_rx.h"
+#include "comm/canfdi_tx.h"
+#include "core/canfdi_common.h"
+#include "ctrl/canfdi_ctrl_dcm.h"
+#include "ctrl/canfdi_ctrl_thr.h"
+#include "ctrl/canfdi_excite.h"
+#include "detect/canfdi_limit.h"
+#include "diag/canfdi_diagnosis.h"
+#include "diag/canfdi_dtc.h"
+#include "diag/canfdi_symptoms.h"
+#include "ft/canfdi_actmgr.h"
+#include "ft/canfdi_vote.h"
+#include "model/canfdi_est_dcm.h"
+#include "model/canfdi_est_thr.h"
+#include "model/canfdi_parity_dcm.h"
+#include "model/canfdi_parity_thr.h"
+
+#define CANFDI_APP_MAX_TX CANFDI_TX_MAX_FRAMES_PER_STEP
+
+/* The one calibration of the product: every module's configuration. */
+typedef struct {
+  canfdi_rx_cfg_t rx;
+  canfdi_ctrl_dcm_cal_t ctrl_dcm;
+  canfdi_ctrl_thr_cal_t ctrl_thr;
+  canfdi_excite_cfg_t excite_dcm; /* added to the speed reference, rad/s */
+  canfdi_excite_cfg_t excite_thr; /* added to the angle reference, rad */
+  bool excite_dcm_on;
+  bool excite_thr_on;
+  canfdi_parity_dcm_cfg_t parity_dcm;
+  canfdi_parity_thr_cfg_t parity_thr;
+  canfdi_est_dcm_cfg_t est_dcm;
+  canfdi_est_thr_cfg_t est_thr;
+  canfdi_limit_cfg_t tps_range;    /* TPS voltage window, Q16.16 V */
+  canfdi_vote_cfg_t vote;
+  canfdi_actmgr_cfg_t actmgr;
+  canfdi_diagnosis_cfg_t diagnosis;
+  int32_t load_nom_Nm_q16;         /* load the parity equations assume */
+  int32_t track_err_alpha_q16;     /* low-pass of |angle - setpoint| per step */
+  uint16_t p2135_steps;            /* TPS disagreement not isolated this long -> P2135 */
+  int32_t uac_alpha_q16;           /* low-pass of U_A - command per step */
+  int32_t uac_thr_V_q16;           /* threshold of the filtered U_A - command */
+} canfdi_app_cal_t;
+
+/* Monotone self-diagnostics, saturating at UINT32_MAX. */
+typedef struct {
+  uint32_t steps;
+  uint32_t deadline_misses;   /* reported by the port */
+  uint32_t saturations;       /* controller outputs limited + tx values limited */
+  uint32_t estimator_resets;  /* est_dcm + est_thr + parity resets */
+  uint32_t frames_rejected;   /* length, CRC, counter, implausible (rx) */
+  uint32_t frames_sent;
+  uint32_t dtc_reports_rejected;
+} canfdi_app_diag_t;
+
+typedef struct {
+  canfdi_app_cal_t cal;  /* copy; the modules point into it */
+  canfdi_rx_t rx;
+  canfdi_tx_t tx;
+  canfdi_ctrl_dcm_t ctrl_dcm;
+  canfdi_ctrl_thr_t ctrl_thr;
+  canfdi_excite_t excite_dcm;
+  canfdi_excite_t excite_thr;
+  canfdi_parity_dcm_t parity_dcm;
+  canfdi_parity_thr_t parity_thr;
+  canfdi_est_dcm_t est_dcm;
+  canfdi_est_thr_t est_thr;
+  canfdi_limit_t tps_range[2];
+  canfdi_vote_t vote;
+  canfdi_actmgr_t actmgr;
+  canfdi_diagnosis_t diagnosis;
+  canfdi_dtc_t dtc;
+  canfdi_symptoms_t sym;
+  canfdi_vote_out_t vote_out;
+  canfdi_actmgr_out_t mgr_out;   /* of the last step */
+  int8_t report[CANFDI_FAULT_COUNT];
+  uint8_t dtc_index[CANFDI_FAULT_COUNT][CANFDI_CATALOGUE_MAX_DTCS]; /* 0xFF none */
+  uint8_t dtc_status_prev[CANFDI_DTC_COUNT];
+  uint32_t faults;               /* fault bits given to the manager last step */
+  int32_t thr_track_err_q16;
+  int32_t uac_f_q16;             /* filtered U_A - applied command, V */
+  uint16_t p2135_n;              /* steps the disagreement stayed unisolated */
+  bool dcm_in_ok;                /* U_A, I_A, omega VALID this step */
+  bool thr_in_ok;                /* TPS1/2, current, supply usable this step */
+  uint32_t now_us;
+  canfdi_app_diag_t diag;
+  bool initialised;
+} canfdi_app_t;
+
+/* Defaults of every module (their *_default_cfg / *_cal_default) plus the
+ * application's choices documented in canfdi_app.c. Cannot fail for
+ * non-NULL. */
+void canfdi_app_default_cal(canfdi_app_cal_t *cal);
+
+/*
+ * Copies cal, initialises every module, starts an operation cycle of the
+ * DTC memory (after an optional NVM load by the caller: see
+ * canfdi_app_dtc()). Returns CANFDI_OK or -CANFDI_EINVAL (a module refused
+ * its configuration; app unusable). Cost: init time only (divisions).
+ */
+int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us);
+
+/* One received frame (forwarded to the input supervision). Returns the
+ * canfdi_rx_frame result. Cost: see canfdi_rx.h. */
+int32_t canfdi_app_rx_frame(canfdi_app_t *app, uint32_t id, const uint8_t *data, uint8_t dlc,
+                            uint32_t now_us);
+
+/* One 1 ms step at now_us; writes the frames to send into out[0..n-1]
+ * (out holds CANFDI_APP_MAX_TX). Returns n >= 0 or -CANFDI_EINVAL. */
+int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *out);
+
+/* The port reports a missed 1 ms deadline. */
+void canfdi_app_deadline_miss(canfdi_app_t *app);
+
+/* The trouble-code memory (read access, NVM load/store by the port). */
+canfdi_dtc_t *canfdi_app_dtc(canfdi_app_t *app);
+
+const canfdi_app_diag_t *canfdi_app_diag(const canfdi_app_t *app);
+
+#endif /* CANFDI_APP_H */

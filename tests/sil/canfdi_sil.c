@@ -1,0 +1,661 @@
+/*
+ * canfdi_sil.c — `canfdi-sil`: software-in-the-loop rig. The firmware
+ * application (firmware/app/canfdi_app.h) and the host_sim plants run in
+ * lockstep in one process and talk only through CAN frames packed and
+ * unpacked by codecs generated from dbc/canfdi.dbc:
+ *
+ *   t_k: scenario setpoints -> SetpointDcm/SetpointThr frames (every 10 ms)
+ *        plant sample       -> DcmSensor/ThrSensor (E2E, comm faults) and
+ *                              SimPlantStatus frames (host_sim frame builder)
+ *        all frames         -> canfdi_app_rx_frame; canfdi_app_step
+ *        ECU frames         -> decoded with the tester codec: actuator
+ *                              commands go to the plant, EcuStatus/EcuDtc
+ *                              feed the timeline and the expectations
+ *        plant steps to t_k+1 with the commands held.
+ *
+ * Reads the scenario format of host_sim/SCENARIO.md and evaluates its
+ * `expect` lines; prints a technician's timeline and one PASS/FAIL line per
+ * expectation, plus an implicit check that no trouble code appears that no
+ * `expect ... dtc` line names. Exit status 0 all passed, 1 a check failed,
+ * 2 usage / scenario error.
+ */
+/* clock_gettime: the pre-included assert.h fixes the feature macros first,
+ * so sil.mk passes -D_POSIX_C_SOURCE for this file as well. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "app/canfdi_app.h"
+#include "canfdi_sil_msg.h"
+#include "canfdi_sim.h"
+#include "canfdi_sim_frames.h"
+#include "canfdi_sim_scenario.h"
+#include "canfdi_sim_trace.h"
+#include "core/canfdi_common.h"
+#include "gen/canfdi_faults.h"
+
+#define EXIT_CHECK 1
+#define EXIT_USAGE 2
+#define MAX_CODES 64U
+
+typedef struct {
+  uint32_t dtc;
+  char code[8];
+  char desc[160];
+} dtc_desc_t;
+
+typedef struct {
+  uint32_t dtc;
+  uint8_t status;       /* last status seen */
+  int64_t first_tf_us;  /* first testFailed, -1 never */
+  int64_t first_pd_us;  /* first pendingDTC */
+  int64_t first_cf_us;  /* first confirmedDTC */
+} dtc_seen_t;
+
+static dtc_desc_t descs[MAX_CODES];
+static size_t n_descs;
+static dtc_seen_t seen[MAX_CODES];
+static size_t n_seen;
+
+static const char *deg_name(unsigned s)
+{
+  static const char *const names[] = {"normal", "degraded", "fail_safe", "fail_silent"};
+  return (s < 4U) ? names[s] : "?";
+}
+
+/* "P0122" from the 3-byte DTC (SAE J2012 letter coding). */
+static void dtc_to_code(uint32_t dtc, char out[8])
+{
+  static const char letters[] = "PCBU";
+  const unsigned hi = (unsigned)((dtc >> 16) & 0xFFU);
+  const unsigned lo = (unsigned)((dtc >> 8) & 0xFFU);
+  (void)snprintf(out, 8, "%c%u%X%02X", letters[(hi >> 6) & 3U], (hi >> 4) & 3U, hi & 0xFU, lo);
+}
+
+static int load_descs(const char *path)
+{
+  FILE *f = fopen(path, "r");
+  char line[512];
+  if (f == NULL) {
+    return -CANFDI_EINVAL;
+  }
+  while ((fgets(line, (int)sizeof line, f) != NULL) && (n_descs < MAX_CODES)) {
+    char *fields[5];
+    char *p = line;
+    size_t n = 0U;
+    while ((n < 5U) && (p != NULL)) {
+      fields[n++] = p;
+      p = (n < 5U) ? strchr(p, ',') : NULL;
+      if (p != NULL) {
+        *p++ = '\0';
+      }
+    }
+    if ((n == 5U) && (strncmp(fields[1], "0x", 2) == 0)) {
+      dtc_desc_t *d = &descs[n_descs++];
+      char *nl = strchr(fields[4], '\n');
+      if (nl != NULL) {
+        *nl = '\0';
+      }
+      d->dtc = (uint32_t)strtoul(fields[1], NULL, 16);
+      (void)snprintf(d->code, sizeof d->code, "%s", fields[0]);
+      (void)snprintf(d->desc, sizeof d->desc, "%s", fields[4]);
+    }
+  }
+  (void)fclose(f);
+  return CANFDI_OK;
+}
+
+static const char *dtc_desc(uint32_t dtc)
+{
+  size_t i;
+  for (i = 0U; i < n_descs; i++) {
+    if (descs[i].dtc == dtc) {
+      return descs[i].desc;
+    }
+  }
+  return "";
+}
+
+static dtc_seen_t *seen_get(uint32_t dtc)
+{
+  size_t i;
+  for (i = 0U; i < n_seen; i++) {
+    if (seen[i].dtc == dtc) {
+      return &seen[i];
+    }
+  }
+  if (n_seen < MAX_CODES) {
+    dtc_seen_t *s = &seen[n_seen++];
+    s->dtc = dtc;
+    s->status = 0U;
+    s->first_tf_us = -1;
+    s->first_pd_us = -1;
+    s->first_cf_us = -1;
+    return s;
+  }
+  return NULL;
+}
+
+static uint32_t code_to_dtc(const char *code)
+{
+  size_t i;
+  for (i = 0U; i < n_descs; i++) {
+    if (strcmp(descs[i].code, code) == 0) {
+      return descs[i].dtc;
+    }
+  }
+  return 0U;
+}
+
+static void usage(FILE *out)
+{
+  fprintf(out,
+          "Usage: canfdi-sil -s SCENARIO [options]\n"
+          "\n"
+          "Software in the loop: the canfdi firmware application against the host_sim\n"
+          "plants in one process, in lockstep at 1 ms, through the DBC codecs (frames,\n"
+          "not shared variables). Prints the trouble-code timeline and checks the\n"
+          "scenario's `expect` lines (host_sim/SCENARIO.md).\n"
+          "\n"
+          "Options:\n"
+          "  -s, --scenario FILE   scenario (host_sim/SCENARIO.md format)\n"
+          "  -o, --output FILE     CSV trace of setpoints, responses, residuals, estimates\n"
+          "  -D, --decimate N      write every N-th step to the trace (default 1)\n"
+          "  -l, --log FILE        candump -L log of every frame on the bus\n"
+          "  -c, --channel NAME    channel name in the log (default vcan0)\n"
+          "  -t, --dtcs FILE       DTC descriptions (default dbc/dtcs.csv)\n"
+          "      --seed N          override the scenario's noise seed\n"
+          "      --timing          wall-clock time of canfdi_app_step: mean and max\n"
+          "      --symptoms        print the symptom vector every 100 ms on stderr\n"
+          "      --sizes           print the firmware's RAM use and exit\n"
+          "  -q, --quiet           only the verdict lines\n"
+          "  -h, --help            this text\n"
+          "\n"
+          "Examples:\n"
+          "  canfdi-sil -s tests/sil/scenarios/thr_tps1_open.scn\n"
+          "  canfdi-sil -s tests/sil/scenarios/demo.scn -o trace.csv -D 5 -l bus.log\n"
+          "\n"
+          "Exit status: 0 every expectation met, 1 an expectation failed, 2 usage error.\n");
+}
+
+static void log_frame(FILE *log, const char *ch, int64_t t_us, uint32_t id, const uint8_t *data,
+                      uint8_t dlc)
+{
+  canfdi_sim_frame_t fr;
+  if (log != NULL) {
+    fr.id = id;
+    fr.dlc = dlc;
+    memcpy(fr.data, data, 8U);
+    (void)canfdi_sim_trace_candump(log, ch, 0, t_us, &fr);
+  }
+}
+
+typedef struct {
+  struct canfdi_sil_msg_ecu_status_t status;
+  struct canfdi_sil_msg_ecu_residual_dcm_t res_dcm;
+  struct canfdi_sil_msg_ecu_residual_thr_t res_thr;
+  struct canfdi_sil_msg_ecu_param_dcm_t prm_dcm;
+  struct canfdi_sil_msg_ecu_param_thr_t prm_thr;
+  bool have_status;
+} ecu_view_t;
+
+static canfdi_app_t app;  /* the firmware's whole state, as on a target */
+static canfdi_sim_scn_t scn;
+static canfdi_sim_t sim;
+
+int main(int argc, char **argv)
+{
+  const char *scn_path = NULL;
+  const char *out_path = NULL;
+  const char *log_path = NULL;
+  const char *dtcs_path = "dbc/dtcs.csv";
+  const char *channel = "vcan0";
+  unsigned long decimate = 1UL;
+  bool quiet = false;
+  bool symptoms = false;
+  bool timing = false;
+  double step_ns_sum = 0.0;
+  double step_ns_max = 0.0;
+  bool have_seed = false;
+  unsigned long long seed = 0ULL;
+  canfdi_sim_scn_err_t err;
+  canfdi_app_cal_t cal;
+  canfdi_sim_frames_t frames;
+  canfdi_sim_in_t in;
+  ecu_view_t ecu;
+  FILE *out = NULL;
+  FILE *log = NULL;
+  uint64_t n_steps;
+  uint64_t k;
+  size_t i;
+  int failures = 0;
+  bool expect_done[CANFDI_SIM_SCN_MAX_EXPECT];
+  int expect_ok[CANFDI_SIM_SCN_MAX_EXPECT];
+  char expect_msg[CANFDI_SIM_SCN_MAX_EXPECT][160];
+  unsigned last_deg[2] = {0U, 0U};
+  unsigned last_bridge = 1U;
+  bool last_thr_en = true;
+  int64_t t_fault_us = -1;
+
+  for (i = 1U; i < (size_t)argc; i++) {
+    const char *a = argv[i];
+    const char *v = ((i + 1U) < (size_t)argc) ? argv[i + 1U] : NULL;
+    if ((strcmp(a, "-h") == 0) || (strcmp(a, "--help") == 0)) {
+      usage(stdout);
+      return EXIT_SUCCESS;
+    } else if ((strcmp(a, "-q") == 0) || (strcmp(a, "--quiet") == 0)) {
+      quiet = true;
+    } else if (strcmp(a, "--timing") == 0) {
+      timing = true;
+    } else if (strcmp(a, "--symptoms") == 0) {
+      symptoms = true;
+    } else if (strcmp(a, "--sizes") == 0) {
+      printf("sizeof(canfdi_app_t) = %zu bytes (host; the target figure is in the .bss of "
+             "make firmware)\n",
+             sizeof(canfdi_app_t));
+      return EXIT_SUCCESS;
+    } else if (v == NULL) {
+      fprintf(stderr, "canfdi-sil: unknown option or missing value '%s'\nTry 'canfdi-sil --help'.\n",
+              a);
+      return EXIT_USAGE;
+    } else if ((strcmp(a, "-s") == 0) || (strcmp(a, "--scenario") == 0)) {
+      scn_path = v;
+      i++;
+    } else if ((strcmp(a, "-o") == 0) || (strcmp(a, "--output") == 0)) {
+      out_path = v;
+      i++;
+    } else if ((strcmp(a, "-l") == 0) || (strcmp(a, "--log") == 0)) {
+      log_path = v;
+      i++;
+    } else if ((strcmp(a, "-c") == 0) || (strcmp(a, "--channel") == 0)) {
+      channel = v;
+      i++;
+    } else if ((strcmp(a, "-t") == 0) || (strcmp(a, "--dtcs") == 0)) {
+      dtcs_path = v;
+      i++;
+    } else if ((strcmp(a, "-D") == 0) || (strcmp(a, "--decimate") == 0)) {
+      decimate = strtoul(v, NULL, 10);
+      if ((decimate == 0UL) || (decimate > 1000000UL)) {
+        fprintf(stderr, "canfdi-sil: --decimate must be 1..1000000\n");
+        return EXIT_USAGE;
+      }
+      i++;
+    } else if (strcmp(a, "--seed") == 0) {
+      seed = strtoull(v, NULL, 10);
+      have_seed = true;
+      i++;
+    } else {
+      fprintf(stderr, "canfdi-sil: unknown option '%s'\nTry 'canfdi-sil --help'.\n", a);
+      return EXIT_USAGE;
+    }
+  }
+  if (scn_path == NULL) {
+    fprintf(stderr, "canfdi-sil: no scenario given (-s FILE)\nTry 'canfdi-sil --help'.\n");
+    return EXIT_USAGE;
+  }
+  if (load_descs(dtcs_path) != CANFDI_OK) {
+    fprintf(stderr, "canfdi-sil: cannot read %s: %s\n", dtcs_path, strerror(errno));
+    return EXIT_USAGE;
+  }
+  if (canfdi_sim_scn_load(&scn, scn_path, &err) != CANFDI_OK) {
+    fprintf(stderr, "canfdi-sil: %s\n", err.msg);
+    return EXIT_USAGE;
+  }
+  if (have_seed) {
+    scn.cfg.seed = (uint64_t)seed;
+  }
+  if (canfdi_sim_scn_setup(&scn, &sim) != CANFDI_OK) {
+    fprintf(stderr, "canfdi-sil: %s: cannot set up the plant\n", scn_path);
+    return EXIT_USAGE;
+  }
+  canfdi_app_default_cal(&cal);
+  if (canfdi_app_init(&app, &cal, 0U) != CANFDI_OK) {
+    fprintf(stderr, "canfdi-sil: the firmware refused its calibration\n");
+    return EXIT_USAGE;
+  }
+  if (out_path != NULL) {
+    out = fopen(out_path, "w");
+    if (out == NULL) {
+      fprintf(stderr, "canfdi-sil: cannot write %s: %s\n", out_path, strerror(errno));
+      return EXIT_USAGE;
+    }
+    fprintf(out, "t_s,sp_speed,speed,sp_angle_deg,angle_deg,ua_cmd,thr_u_cmd,load,"
+                 "rn_dcm1,rn_dcm2,rn_dcm3,rn_dcm4,rn_thr_corr,rn_thr_tps1,rn_thr_tps2,rn_thr_arm,"
+                 "ra_est,psi_est,ra_true,thr_r_est,deg_dcm,deg_thr,bridge,thr_enable\n");
+  }
+  if (log_path != NULL) {
+    log = fopen(log_path, "w");
+    if (log == NULL) {
+      fprintf(stderr, "canfdi-sil: cannot write %s: %s\n", log_path, strerror(errno));
+      return EXIT_USAGE;
+    }
+  }
+  for (i = 0U; i < scn.n_faults; i++) {
+    if ((t_fault_us < 0) || (scn.faults[i].t_start_us < t_fault_us)) {
+      t_fault_us = scn.faults[i].t_start_us;
+    }
+  }
+  for (i = 0U; i < CANFDI_SIM_SCN_MAX_EXPECT; i++) {
+    expect_done[i] = false;
+    expect_ok[i] = 0;
+    expect_msg[i][0] = '\0';
+  }
+  memset(&ecu, 0, sizeof ecu);
+  memset(&in, 0, sizeof in);
+  in.dcm.bridge = CANFDI_ACTMGR_BRIDGE_A;
+  canfdi_sim_frames_init(&frames, (uint8_t)CANFDI_SIM_MODE_LOCKSTEP);
+  n_steps = (uint64_t)llround(scn.duration_s * 1000.0);
+  if (!quiet) {
+    printf("canfdi-sil: %s, %.3f s, seed %llu, %zu fault(s)\n", scn_path, scn.duration_s,
+           (unsigned long long)scn.cfg.seed, scn.n_faults);
+    for (i = 0U; i < scn.n_faults; i++) {
+      printf("  injects %-22s %-12s from %8.3f s  (%s)\n", canfdi_fault_table[scn.faults[i].id].name,
+             canfdi_sim_fault_mode_name(scn.faults[i].mode), (double)scn.faults[i].t_start_us * 1e-6,
+             canfdi_fault_table[scn.faults[i].id].description);
+    }
+    printf("\n  time [s]  event\n");
+  }
+  for (k = 0U; k < n_steps; k++) {
+    const int64_t t_us = canfdi_sim_time_us(&sim);
+    const uint32_t now_us = (uint32_t)t_us;
+    canfdi_sim_trace_sp_t sp;
+    canfdi_sim_frame_t pf[CANFDI_SIM_FRAMES_MAX_PER_STEP];
+    canfdi_tx_frame_t ef[CANFDI_APP_MAX_TX];
+    size_t npf;
+    int32_t nef;
+    size_t j;
+    canfdi_sim_scn_eval(&scn, t_us, &sp.speed_rad_s, &sp.angle_deg, &sp.load_Nm);
+    /* the vehicle's setpoints, every 10 ms */
+    if ((k % 10U) == 0U) {
+      uint8_t d[8];
+      struct canfdi_sil_msg_setpoint_dcm_t spd;
+      struct canfdi_sil_msg_setpoint_thr_t spt;
+      memset(d, 0, sizeof d);
+      spd.sp_dcm_speed = canfdi_sil_msg_setpoint_dcm_sp_dcm_speed_encode(sp.speed_rad_s);
+      (void)canfdi_sil_msg_setpoint_dcm_pack(d, &spd, sizeof d);
+      (void)canfdi_app_rx_frame(&app, CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID, d, 8U, now_us);
+      log_frame(log, channel, t_us, CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID, d, 8U);
+      memset(d, 0, sizeof d);
+      spt.sp_thr_angle = canfdi_sil_msg_setpoint_thr_sp_thr_angle_encode(sp.angle_deg);
+      (void)canfdi_sil_msg_setpoint_thr_pack(d, &spt, sizeof d);
+      (void)canfdi_app_rx_frame(&app, CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID, d, 8U, now_us);
+      log_frame(log, channel, t_us, CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID, d, 8U);
+    }
+    /* the plant's sensor frames of this sample */
+    npf = canfdi_sim_frames_build(&frames, &sim, &in, pf);
+    for (j = 0U; j < npf; j++) {
+      (void)canfdi_app_rx_frame(&app, pf[j].id, pf[j].data, pf[j].dlc, now_us);
+      log_frame(log, channel, t_us, pf[j].id, pf[j].data, pf[j].dlc);
+    }
+    /* the ECU's step */
+    if (timing) {
+      struct timespec t0;
+      struct timespec t1;
+      double ns;
+      (void)clock_gettime(CLOCK_MONOTONIC, &t0);
+      nef = canfdi_app_step(&app, now_us, ef);
+      (void)clock_gettime(CLOCK_MONOTONIC, &t1);
+      ns = ((double)(t1.tv_sec - t0.tv_sec) * 1e9) + (double)(t1.tv_nsec - t0.tv_nsec);
+      step_ns_sum += ns;
+      step_ns_max = (ns > step_ns_max) ? ns : step_ns_max;
+    } else {
+      nef = canfdi_app_step(&app, now_us, ef);
+    }
+    for (j = 0U; (nef > 0) && (j < (size_t)nef); j++) {
+      const canfdi_tx_frame_t *f = &ef[j];
+      log_frame(log, channel, t_us, f->id, f->data, f->dlc);
+      if (f->id == CANFDI_SIL_MSG_DCM_ACTUATOR_FRAME_ID) {
+        struct canfdi_sil_msg_dcm_actuator_t a;
+        if (canfdi_sil_msg_dcm_actuator_unpack(&a, f->data, f->dlc) == 0) {
+          in.dcm.u_cmd_V = canfdi_sil_msg_dcm_actuator_dcm_ua_cmd_decode(a.dcm_ua_cmd);
+          in.dcm.bridge = a.dcm_bridge_sel;
+          in.dcm.enable = (a.dcm_enable != 0U);
+          if (!quiet && (a.dcm_bridge_sel != last_bridge)) {
+            printf("  %8.3f  dcm: power stage %s -> %s\n", (double)t_us * 1e-6,
+                   (last_bridge == 1U) ? "A" : ((last_bridge == 2U) ? "B" : "none"),
+                   (a.dcm_bridge_sel == 1U) ? "A" : ((a.dcm_bridge_sel == 2U) ? "B" : "none (drive off)"));
+          }
+          last_bridge = a.dcm_bridge_sel;
+        }
+      } else if (f->id == CANFDI_SIL_MSG_THR_ACTUATOR_FRAME_ID) {
+        struct canfdi_sil_msg_thr_actuator_t a;
+        if (canfdi_sil_msg_thr_actuator_unpack(&a, f->data, f->dlc) == 0) {
+          in.thr.u_cmd_V = canfdi_sil_msg_thr_actuator_thr_u_cmd_decode(a.thr_u_cmd);
+          in.thr.enable = (a.thr_enable != 0U);
+          if (!quiet && (in.thr.enable != last_thr_en)) {
+            printf("  %8.3f  thr: motor %s\n", (double)t_us * 1e-6,
+                   in.thr.enable ? "energised" : "de-energised (spring -> limp-home)");
+          }
+          last_thr_en = in.thr.enable;
+        }
+      } else if (f->id == CANFDI_SIL_MSG_ECU_STATUS_FRAME_ID) {
+        if (canfdi_sil_msg_ecu_status_unpack(&ecu.status, f->data, f->dlc) == 0) {
+          const unsigned ds[2] = {ecu.status.sts_deg_state_dcm, ecu.status.sts_deg_state_thr};
+          unsigned s;
+          ecu.have_status = true;
+          for (s = 0U; s < 2U; s++) {
+            if (!quiet && (ds[s] != last_deg[s])) {
+              printf("  %8.3f  degradation %s: %s -> %s\n", (double)t_us * 1e-6,
+                     (s == 0U) ? "dcm" : "thr", deg_name(last_deg[s]), deg_name(ds[s]));
+            }
+            last_deg[s] = ds[s];
+          }
+        }
+      } else if (f->id == CANFDI_SIL_MSG_ECU_DTC_FRAME_ID) {
+        struct canfdi_sil_msg_ecu_dtc_t d;
+        if ((canfdi_sil_msg_ecu_dtc_unpack(&d, f->data, f->dlc) == 0) && (d.dtc_code != 0U)) {
+          dtc_seen_t *s = seen_get(d.dtc_code);
+          const uint8_t st = (uint8_t)(d.dtc_sts_test_failed | (d.dtc_sts_test_failed_this_op_cycle << 1) |
+                                       (d.dtc_sts_pending << 2) | (d.dtc_sts_confirmed << 3) |
+                                       (d.dtc_sts_not_completed_since_clear << 4) |
+                                       (d.dtc_sts_failed_since_clear << 5) |
+                                       (d.dtc_sts_not_completed_this_op_cycle << 6) |
+                                       (d.dtc_sts_warning_indicator << 7));
+          if (s != NULL) {
+            char code[8];
+            dtc_to_code(d.dtc_code, code);
+            if ((d.dtc_sts_test_failed != 0U) && (s->first_tf_us < 0)) {
+              s->first_tf_us = t_us;
+            }
+            if ((d.dtc_sts_pending != 0U) && (s->first_pd_us < 0)) {
+              s->first_pd_us = t_us;
+            }
+            if ((d.dtc_sts_confirmed != 0U) && (s->first_cf_us < 0)) {
+              s->first_cf_us = t_us;
+            }
+            if (!quiet && (((st ^ s->status) & 0x09U) != 0U)) {
+              printf("  %8.3f  %-5s %-12s %s\n", (double)t_us * 1e-6, code,
+                     (st & 0x08U) ? ((st & 0x01U) ? "confirmed" : "stored") :
+                                    ((st & 0x01U) ? "testFailed" : "passed"),
+                     dtc_desc(d.dtc_code));
+            }
+            s->status = st;
+          }
+        }
+      } else if (f->id == CANFDI_SIL_MSG_ECU_RESIDUAL_DCM_FRAME_ID) {
+        (void)canfdi_sil_msg_ecu_residual_dcm_unpack(&ecu.res_dcm, f->data, f->dlc);
+      } else if (f->id == CANFDI_SIL_MSG_ECU_RESIDUAL_THR_FRAME_ID) {
+        (void)canfdi_sil_msg_ecu_residual_thr_unpack(&ecu.res_thr, f->data, f->dlc);
+      } else if (f->id == CANFDI_SIL_MSG_ECU_PARAM_DCM_FRAME_ID) {
+        (void)canfdi_sil_msg_ecu_param_dcm_unpack(&ecu.prm_dcm, f->data, f->dlc);
+      } else if (f->id == CANFDI_SIL_MSG_ECU_PARAM_THR_FRAME_ID) {
+        (void)canfdi_sil_msg_ecu_param_thr_unpack(&ecu.prm_thr, f->data, f->dlc);
+      } else {
+        /* EcuDiagnosis: in the log only */
+      }
+    }
+    in.dcm.load_Nm = sp.load_Nm;
+    if (symptoms && ((k % 100U) == 0U)) {
+      const canfdi_symptoms_t *y = &app.sym;
+      fprintf(stderr, "%6.2f rn %5.2f %5.2f %5.2f %5.2f v%x | pd %6.3f %6.3f %6.3f %6.3f v%x | thr rn %5.2f %5.2f %5.2f %5.2f pd %6.3f %6.3f %6.3f %6.3f v%x f%x\n",
+              (double)t_us * 1e-6, y->dcm_rn_q16[0] / 65536.0, y->dcm_rn_q16[1] / 65536.0,
+              y->dcm_rn_q16[2] / 65536.0, y->dcm_rn_q16[3] / 65536.0, y->dcm_rn_valid,
+              y->dcm_pdev_q16[0] / 65536.0, y->dcm_pdev_q16[1] / 65536.0, y->dcm_pdev_q16[2] / 65536.0,
+              y->dcm_pdev_q16[3] / 65536.0, y->dcm_pdev_valid, y->thr_rn_q16[0] / 65536.0,
+              y->thr_rn_q16[1] / 65536.0, y->thr_rn_q16[2] / 65536.0, y->thr_rn_q16[3] / 65536.0,
+              y->thr_pdev_q16[0] / 65536.0, y->thr_pdev_q16[1] / 65536.0, y->thr_pdev_q16[2] / 65536.0,
+              y->thr_pdev_q16[3] / 65536.0, y->thr_pdev_valid, (unsigned)y->flags);
+    }
+    if ((out != NULL) && ((k % decimate) == 0U)) {
+      fprintf(out,
+              "%.3f,%.4g,%.5g,%.4g,%.5g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,"
+              "%.5g,%.5g,%.5g,%.5g,%u,%u,%u,%u\n",
+              (double)t_us * 1e-6, sp.speed_rad_s, sim.dcm.w_rad_s, sp.angle_deg,
+              sim.thr.theta_rad * (180.0 / 3.14159265358979323846), in.dcm.u_cmd_V, in.thr.u_cmd_V,
+              sp.load_Nm, canfdi_sil_msg_ecu_residual_dcm_res_dcm_r1_decode(ecu.res_dcm.res_dcm_r1),
+              canfdi_sil_msg_ecu_residual_dcm_res_dcm_r2_decode(ecu.res_dcm.res_dcm_r2),
+              canfdi_sil_msg_ecu_residual_dcm_res_dcm_r3_decode(ecu.res_dcm.res_dcm_r3),
+              canfdi_sil_msg_ecu_residual_dcm_res_dcm_r4_decode(ecu.res_dcm.res_dcm_r4),
+              canfdi_sil_msg_ecu_residual_thr_res_thr_corr_decode(ecu.res_thr.res_thr_corr),
+              canfdi_sil_msg_ecu_residual_thr_res_thr_tps1_decode(ecu.res_thr.res_thr_tps1),
+              canfdi_sil_msg_ecu_residual_thr_res_thr_tps2_decode(ecu.res_thr.res_thr_tps2),
+              canfdi_sil_msg_ecu_residual_thr_res_thr_current_decode(ecu.res_thr.res_thr_current),
+              canfdi_sil_msg_ecu_param_dcm_prm_dcm_ra_decode(ecu.prm_dcm.prm_dcm_ra),
+              canfdi_sil_msg_ecu_param_dcm_prm_dcm_psi_decode(ecu.prm_dcm.prm_dcm_psi), sim.dcm.ra_ohm,
+              canfdi_sil_msg_ecu_param_thr_prm_thr_r_decode(ecu.prm_thr.prm_thr_r), last_deg[0],
+              last_deg[1], (unsigned)in.dcm.bridge, in.thr.enable ? 1U : 0U);
+    }
+    canfdi_sim_step(&sim, &in);
+    /* degradation expectations are judged at their time */
+    for (i = 0U; i < scn.n_expects; i++) {
+      const canfdi_sim_expect_t *e = &scn.expects[i];
+      const int64_t te_us = (int64_t)llround(e->t_s * 1e6);
+      if (!expect_done[i] && (strcmp(e->kind, "degradation") == 0) &&
+          (canfdi_sim_time_us(&sim) >= te_us)) {
+        const unsigned s = (strcmp(e->arg1, "dcm") == 0) ? 0U : 1U;
+        expect_done[i] = true;
+        expect_ok[i] = (ecu.have_status && (strcmp(deg_name(last_deg[s]), e->arg2) == 0)) ? 1 : 0;
+        (void)snprintf(expect_msg[i], sizeof expect_msg[i], "degradation %s at %.3f s: %s (expected %s)",
+                       e->arg1, e->t_s, ecu.have_status ? deg_name(last_deg[s]) : "no EcuStatus yet",
+                       e->arg2);
+      }
+    }
+  }
+  /* the DTC expectations and the implicit "nothing else" */
+  if (!quiet) {
+    printf("\n");
+  }
+  for (i = 0U; i < scn.n_expects; i++) {
+    const canfdi_sim_expect_t *e = &scn.expects[i];
+    const int64_t te_us = (int64_t)llround(e->t_s * 1e6);
+    if (strcmp(e->kind, "dtc") == 0) {
+      const uint32_t dtc = code_to_dtc(e->arg1);
+      const dtc_seen_t *s = NULL;
+      int64_t t_seen = -1;
+      size_t q;
+      const char *what = (e->arg2[0] != '\0') ? e->arg2 : "testFailed or confirmed";
+      for (q = 0U; q < n_seen; q++) {
+        if (seen[q].dtc == dtc) {
+          s = &seen[q];
+        }
+      }
+      if (s != NULL) {
+        if (strcmp(e->arg2, "confirmed") == 0) {
+          t_seen = s->first_cf_us;
+        } else if (strcmp(e->arg2, "pending") == 0) {
+          t_seen = s->first_pd_us;
+        } else {
+          t_seen = (s->first_tf_us >= 0) ? s->first_tf_us : s->first_cf_us;
+        }
+      }
+      expect_ok[i] = ((t_seen >= 0) && (t_seen <= te_us)) ? 1 : 0;
+      if (t_seen < 0) {
+        (void)snprintf(expect_msg[i], sizeof expect_msg[i], "dtc %s %s by %.3f s: never seen", e->arg1,
+                       what, e->t_s);
+      } else if ((t_fault_us >= 0) && (t_fault_us <= t_seen)) {
+        /* delay after the latest injection at or before the detection */
+        int64_t t_f = t_fault_us;
+        for (q = 0U; q < scn.n_faults; q++) {
+          if ((scn.faults[q].t_start_us <= t_seen) && (scn.faults[q].t_start_us > t_f)) {
+            t_f = scn.faults[q].t_start_us;
+          }
+        }
+        (void)snprintf(expect_msg[i], sizeof expect_msg[i],
+                       "dtc %s %s by %.3f s: at %.3f s (%.0f ms after the fault at %.3f s)", e->arg1,
+                       what, e->t_s, (double)t_seen * 1e-6, (double)(t_seen - t_f) * 1e-3,
+                       (double)t_f * 1e-6);
+      } else {
+        (void)snprintf(expect_msg[i], sizeof expect_msg[i], "dtc %s %s by %.3f s: at %.3f s", e->arg1, what,
+                       e->t_s, (double)t_seen * 1e-6);
+      }
+      expect_done[i] = true;
+    } else if (strcmp(e->kind, "no_dtc") == 0) {
+      size_t q;
+      int64_t first = -1;
+      uint32_t code = 0U;
+      for (q = 0U; q < n_seen; q++) {
+        const int64_t tq = (seen[q].first_tf_us >= 0) ? seen[q].first_tf_us : seen[q].first_cf_us;
+        if ((tq >= 0) && (tq <= te_us) && ((first < 0) || (tq < first))) {
+          first = tq;
+          code = seen[q].dtc;
+        }
+      }
+      expect_ok[i] = (first < 0) ? 1 : 0;
+      if (first < 0) {
+        (void)snprintf(expect_msg[i], sizeof expect_msg[i], "no trouble code up to %.3f s", e->t_s);
+      } else {
+        char c[8];
+        dtc_to_code(code, c);
+        (void)snprintf(expect_msg[i], sizeof expect_msg[i], "no trouble code up to %.3f s: %s at %.3f s",
+                       e->t_s, c, (double)first * 1e-6);
+      }
+      expect_done[i] = true;
+    } else if (!expect_done[i]) {
+      expect_ok[i] = 0;
+      (void)snprintf(expect_msg[i], sizeof expect_msg[i], "%s: not evaluated (beyond the run?)", e->kind);
+    } else {
+      /* degradation: judged during the run */
+    }
+    printf("%s  %s:%u: %s\n", expect_ok[i] ? "PASS" : "FAIL", scn_path, e->line, expect_msg[i]);
+    if (!expect_ok[i]) {
+      failures++;
+    }
+  }
+  for (i = 0U; i < n_seen; i++) {
+    size_t q;
+    bool named = false;
+    char c[8];
+    if ((seen[i].first_tf_us < 0) && (seen[i].first_cf_us < 0)) {
+      continue;
+    }
+    dtc_to_code(seen[i].dtc, c);
+    for (q = 0U; q < scn.n_expects; q++) {
+      if ((strcmp(scn.expects[q].kind, "dtc") == 0) && (strcmp(scn.expects[q].arg1, c) == 0)) {
+        named = true;
+      }
+    }
+    if (!named) {
+      printf("FAIL  %s: unexpected trouble code %s at %.3f s (%s)\n", scn_path, c,
+             (double)((seen[i].first_tf_us >= 0) ? seen[i].first_tf_us : seen[i].first_cf_us) * 1e-6,
+             dtc_desc(seen[i].dtc));
+      failures++;
+    }
+  }
+  if (!quiet) {
+    const canfdi_app_diag_t *d = canfdi_app_diag(&app);
+    printf("ecu self-diagnostics: %lu steps, %lu frames sent, %lu rejected, %lu saturations, "
+           "%lu estimator resets, %lu deadline misses\n",
+           (unsigned long)d->steps, (unsigned long)d->frames_sent, (unsigned long)d->frames_rejected,
+           (unsigned long)d->saturations, (unsigned long)d->estimator_resets,
+           (unsigned long)d->deadline_misses);
+  }
+  if (timing && (n_steps > 0U)) {
+    printf("canfdi_app_step wall-clock: mean %.0f ns, max %.0f ns over %llu steps (host)\n",
+           step_ns_sum / (double)n_steps, step_ns_max, (unsigned long long)n_steps);
+  }
+  printf("%s  %s (%d check(s) failed)\n", (failures == 0) ? "PASSED" : "FAILED", scn_path, failures);
+  if ((out != NULL) && (fclose(out) != 0)) {
+    failures++;
+  }
+  if ((log != NULL) && (fclose(log) != 0)) {
+    failures++;
+  }
+  return (failures == 0) ? EXIT_SUCCESS : EXIT_CHECK;
+}
