@@ -40,9 +40,10 @@ void canfdi_app_default_cal(canfdi_app_cal_t *cal)
     cal->excite_thr.sine_period_us = 0U;
     cal->excite_thr_on = false;
     canfdi_parity_dcm_default_cfg(&cal->parity_dcm);
-    /* The firmware does not know the load: r2..r4 follow their own mean
-     * over 1 s, so that a constant or slowly changing load is not a fault
-     * (see canfdi_parity_dcm.h, load_tau_s). */
+    /* The load comes from the vehicle (SpDcmLoad); an unknown share of it
+     * may remain: r2..r4 follow their own mean over 1 s, so that a constant
+     * or slowly changing unknown share is not a fault (see
+     * canfdi_parity_dcm.h, load_tau_s). */
     cal->parity_dcm.load_tau_s = 1U;
     canfdi_parity_thr_default_cfg(&cal->parity_thr);
     canfdi_est_dcm_default_cfg(&cal->est_dcm);
@@ -196,6 +197,17 @@ static bool in_usable(const canfdi_app_t *app, unsigned idx)
 
 static int32_t in_val(const canfdi_app_t *app, unsigned idx) { return app->rx.in[idx].value_q16; }
 
+/* The load torque the models assume: the vehicle's feed-forward
+ * (SetpointDcm.SpDcmLoad) while it is valid, else the calibrated nominal
+ * load, which canfdi_app_step offers the input supervision as the stand-in
+ * of every step (lost, rejected or not yet received). */
+static int32_t load_known_q16(const canfdi_app_t *app)
+{
+  return (app->rx.in[CANFDI_RX_IN_SP_DCM_LOAD].quality != (uint8_t)CANFDI_RX_INVALID)
+             ? in_val(app, CANFDI_RX_IN_SP_DCM_LOAD)
+             : app->cal.load_nom_Nm_q16;
+}
+
 /* (est - nom) / nom in Q16.16, saturating; both in the same Q format. */
 static int32_t pdev_q16(int32_t est, int32_t nom)
 {
@@ -290,7 +302,9 @@ static void step_detect(canfdi_app_t *app)
   pd.u_V_q16 = in_val(app, CANFDI_RX_IN_DCM_UA);
   pd.i_A_q16 = in_val(app, CANFDI_RX_IN_DCM_IA);
   pd.w_rad_s_q16 = in_val(app, CANFDI_RX_IN_DCM_OMEGA);
-  pd.load_Nm_q16 = app->cal.load_nom_Nm_q16;
+  pd.load_Nm_q16 = load_known_q16(app);
+  canfdi_est_dcm_set_load_offset(&app->est_dcm,
+                                 canfdi_sub_s32_sat(pd.load_Nm_q16, app->cal.load_nom_Nm_q16));
   if (dcm_ok) {
     (void)canfdi_parity_dcm_step(&app->parity_dcm, &pd);
     canfdi_est_dcm_step(&app->est_dcm, pd.u_V_q16, pd.i_A_q16, pd.w_rad_s_q16);
@@ -329,8 +343,21 @@ static void step_symptoms(canfdi_app_t *app)
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI] =
       pdev_q16(canfdi_est_dcm_psi_q16(&app->est_dcm), ed->psi_nom_q16);
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J] = pdev_q16(canfdi_est_dcm_j_q24(&app->est_dcm), ed->j_nom_q24);
-  s->dcm_pdev_q16[CANFDI_SYM_DCM_P_FRICTION] =
-      pdev_q16(canfdi_est_dcm_mc_q16(&app->est_dcm), ed->mc_nom_q16);
+  /* Lumped M_c = M_F0 + M_L against the nominal friction plus the known
+   * load: the calibrated mc_nom holds load_nom, so the reference moves by
+   * (known - load_nom). The deviation stays normalised to mc_nom (the
+   * thresholds are fractions of the nominal operating point's M_c, and the
+   * reference may come near 0 at light load). Scaling and overflow: Q16.16
+   * N m, saturating add/sub, saturating division. */
+  {
+    const int32_t mc_ref = canfdi_add_s32_sat(
+        ed->mc_nom_q16, canfdi_sub_s32_sat(load_known_q16(app), app->cal.load_nom_Nm_q16));
+    s->dcm_pdev_q16[CANFDI_SYM_DCM_P_FRICTION] =
+        (ed->mc_nom_q16 != 0)
+            ? canfdi_div_s32_qn(canfdi_sub_s32_sat(canfdi_est_dcm_mc_q16(&app->est_dcm), mc_ref),
+                                ed->mc_nom_q16, 16U)
+            : 0;
+  }
   s->dcm_pdev_valid = !app->dcm_in_ok ? 0U :
       (uint8_t)((canfdi_est_dcm_arm_converged(&app->est_dcm) ? 0x03U : 0U) |
                 (canfdi_est_dcm_mech_converged(&app->est_dcm) ? 0x0CU : 0U));
@@ -692,7 +719,9 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     int32_t u_dcm = 0;
     int32_t u_thr = 0;
     app->now_us = now_us;
-    /* 1. input supervision */
+    /* 1. input supervision; the nominal load stands in for a missing or
+     * rejected load feed-forward */
+    (void)canfdi_rx_set_estimate(&app->rx, CANFDI_RX_IN_SP_DCM_LOAD, app->cal.load_nom_Nm_q16);
     (void)canfdi_rx_step(&app->rx, now_us);
     /* 2.-3. range checks, vote */
     step_vote(app);

@@ -31,6 +31,17 @@
  * The models use the command applied in the previous step (the voltage the
  * bridge held over the interval that ends with this sample).
  *
+ * Load: the firmware has no torque sensor; the vehicle sends the load it
+ * knows it applies with the speed setpoint (SpDcmLoad, rx input
+ * CANFDI_RX_IN_SP_DCM_LOAD). It is the parity equations' load_Nm_q16, the
+ * estimator's known load offset (canfdi_est_dcm_set_load_offset, relative
+ * to cal.load_nom_Nm_q16 which est_dcm's mc_nom includes), and the lumped
+ * M_c deviation compares against mc_nom + (known - nominal) load,
+ * normalised to mc_nom. Lost or rejected: cal.load_nom_Nm_q16 (given to
+ * canfdi_rx as the stand-in every step). An unknown share of the load (the
+ * vehicle's figure is wrong or incomplete) still looks like friction: r2..r4
+ * follow their mean over load_tau_s, the lumped M_c does not.
+ *
  * Faults given to the manager: the catalogue ids whose trouble code has
  * testFailed set (qualified by the DTC memory's debouncing), plus the ids
  * the diagnosis reports FAILED this step, plus what the manager detected
@@ -59,7 +70,7 @@
  * 30..32 k instructions per step on average (`make sil-bench`). The same
  * run shows the ECU's frames bit-identical between the host build and both
  * target builds.
- * Memory: sizeof(canfdi_app_t) = 9136 bytes on Cortex-M0+/M4 (924 of them
+ * Memory: sizeof(canfdi_app_t) = 9288 bytes on Cortex-M0+/M4 (928 of them
  * the calibration copy), all of the application's RAM (static; `make
  * firmware` shows it in .bss); code ~5.4 kB for this module (M0+, -Os) on
  * top of the modules it calls. Stack: canfdi_app_step 296 bytes (M0+,
@@ -104,7 +115,9 @@ typedef struct {
   canfdi_vote_cfg_t vote;
   canfdi_actmgr_cfg_t actmgr;
   canfdi_diagnosis_cfg_t diagnosis;
-  int32_t load_nom_Nm_q16;         /* load the parity equations assume */
+  int32_t load_nom_Nm_q16;         /* load the models assume while the vehicle's
+                                    * load feed-forward (SetpointDcm.SpDcmLoad) is
+                                    * lost, rejected or not yet received */
   int32_t track_err_alpha_q16;     /* low-pass of |angle - setpoint| per step */
   uint16_t p2135_steps;            /* TPS disagreement not isolated this long -> P2135 */
   int32_t uac_alpha_q16;           /* low-pass of U_A - command per step */

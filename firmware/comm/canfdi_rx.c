@@ -46,7 +46,7 @@ static const frame_info_t frame_info[CANFDI_RX_F_COUNT] = {
      CANFDI_RX_MON_THR_LENGTH, CANFDI_RX_MON_THR_CRC, CANFDI_RX_MON_THR_COUNTER,
      CANFDI_RX_MON_THR_IMPLAUSIBLE, CANFDI_RX_IN_THR_TPS1, 4U},
     {CANFDI_MSG_SETPOINT_DCM_CYCLE_TIME_MS * 1000U, CANFDI_RX_MON_SP_DCM_TIMEOUT,
-     CANFDI_RX_MON_SP_DCM_LENGTH, 0U, 0U, CANFDI_RX_MON_SP_DCM_RANGE, CANFDI_RX_IN_SP_DCM_SPEED, 1U},
+     CANFDI_RX_MON_SP_DCM_LENGTH, 0U, 0U, CANFDI_RX_MON_SP_DCM_RANGE, CANFDI_RX_IN_SP_DCM_SPEED, 2U},
     {CANFDI_MSG_SETPOINT_THR_CYCLE_TIME_MS * 1000U, CANFDI_RX_MON_SP_THR_TIMEOUT,
      CANFDI_RX_MON_SP_THR_LENGTH, 0U, 0U, CANFDI_RX_MON_SP_THR_RANGE, CANFDI_RX_IN_SP_THR_ANGLE, 1U},
 };
@@ -87,6 +87,9 @@ static const input_info_t input_info[CANFDI_RX_IN_COUNT] = {
      CANFDI_RX_F_THR_SENSOR},
     {CANFDI_SIG_SETPOINT_DCM_SP_DCM_SPEED_SCALE_Q32, CANFDI_SIG_SETPOINT_DCM_SP_DCM_SPEED_OFFSET_Q32,
      CANFDI_RAW_SETPOINT_DCM_SP_DCM_SPEED_MIN, CANFDI_RAW_SETPOINT_DCM_SP_DCM_SPEED_MAX,
+     CANFDI_RX_F_SP_DCM},
+    {CANFDI_SIG_SETPOINT_DCM_SP_DCM_LOAD_SCALE_Q32, CANFDI_SIG_SETPOINT_DCM_SP_DCM_LOAD_OFFSET_Q32,
+     CANFDI_RAW_SETPOINT_DCM_SP_DCM_LOAD_MIN, CANFDI_RAW_SETPOINT_DCM_SP_DCM_LOAD_MAX,
      CANFDI_RX_F_SP_DCM},
     /* The DBC sends degrees; the firmware works in radians. */
     {CANFDI_SIG_SETPOINT_THR_SP_THR_ANGLE_RAD_SCALE_Q32,
@@ -284,22 +287,21 @@ static int setpoint(canfdi_rx_t *rx, unsigned f, const uint8_t *data, uint8_t dl
     frame_error(rx, f);
     out = CANFDI_RX_BAD_LENGTH;
   } else {
-    int32_t raw;
     int st;
     bool ok;
     report(rx, fi->mon_length, false);
     if (f == (unsigned)CANFDI_RX_F_SP_DCM) {
       struct canfdi_msg_setpoint_dcm_t m;
       st = canfdi_msg_setpoint_dcm_unpack(&m, data, dlc);
-      raw = (int32_t)m.sp_dcm_speed;
+      ok = take_signal(rx, CANFDI_RX_IN_SP_DCM_SPEED, (int32_t)m.sp_dcm_speed, now_us);
+      ok = take_signal(rx, CANFDI_RX_IN_SP_DCM_LOAD, (int32_t)m.sp_dcm_load, now_us) && ok;
     } else {
       struct canfdi_msg_setpoint_thr_t m;
       st = canfdi_msg_setpoint_thr_unpack(&m, data, dlc);
-      raw = (int32_t)m.sp_thr_angle;
+      ok = take_signal(rx, fi->first_input, (int32_t)m.sp_thr_angle, now_us);
     }
     CANFDI_ASSERT(st == 0);
     (void)st;
-    ok = take_signal(rx, fi->first_input, raw, now_us);
     report(rx, fi->mon_range, !ok);
     out = ok ? CANFDI_RX_ACCEPTED : CANFDI_RX_IMPLAUSIBLE;
   }

@@ -52,7 +52,13 @@
  * Validated inputs (rx->in[], published by canfdi_rx_step; Q16.16 SI):
  *   CANFDI_RX_IN_DCM_UA V, _DCM_IA A, _DCM_OMEGA rad/s, _DCM_USUPPLY V,
  *   _THR_TPS1 V, _THR_TPS2 V, _THR_IMOT A, _THR_USUPPLY V,
- *   _SP_DCM_SPEED rad/s, _SP_THR_ANGLE rad (the DBC sends degrees).
+ *   _SP_DCM_SPEED rad/s, _SP_DCM_LOAD N m (the vehicle's known load
+ *   torque, SetpointDcm.SpDcmLoad), _SP_THR_ANGLE rad (the DBC sends
+ *   degrees). The two SetpointDcm signals are range-checked one by one:
+ *   an implausible load is rejected (the input goes into error) while a
+ *   plausible speed of the same frame is taken, and vice versa. What to use
+ *   in place of a lost or rejected load is the application's choice
+ *   (canfdi_app: the calibrated nominal load via canfdi_rx_set_estimate).
  * Quality of each input, decided per step:
  *   VALID        the last accepted value, no error since (or recovered),
  *                frame not timed out. `fresh` says a new sample arrived since
@@ -123,7 +129,7 @@
  * A 1 ms cycle with both sensor frames (and a setpoint every 10 ms) costs
  * about 2000 (M4) / 2900 (M0+) instructions. No division anywhere; 64-bit
  * multiplies call __aeabi_lmul on M0+.
- * Memory: sizeof(canfdi_rx_t) = 672 bytes on a 32-bit target (196 of them
+ * Memory: sizeof(canfdi_rx_t) = 712 bytes on a 32-bit target (204 of them
  * the diagnostics, 88 the two E2E receivers with their counters); code
  * 2.9 kB (-Os, M0+ and M4); stack: canfdi_rx_frame 48 + 88 bytes plus the
  * E2E check and the generated unpack (-fstack-usage). No heap, no
@@ -158,8 +164,9 @@ typedef enum {
   CANFDI_RX_IN_THR_IMOT = 6,    /* throttle motor current, A */
   CANFDI_RX_IN_THR_USUPPLY = 7, /* throttle supply, V */
   CANFDI_RX_IN_SP_DCM_SPEED = 8, /* speed setpoint, rad/s */
-  CANFDI_RX_IN_SP_THR_ANGLE = 9, /* throttle angle setpoint, rad */
-  CANFDI_RX_IN_COUNT = 10
+  CANFDI_RX_IN_SP_DCM_LOAD = 9,  /* known load torque (feed-forward), N m */
+  CANFDI_RX_IN_SP_THR_ANGLE = 10, /* throttle angle setpoint, rad */
+  CANFDI_RX_IN_COUNT = 11
 } canfdi_rx_input_id_t;
 
 typedef enum {

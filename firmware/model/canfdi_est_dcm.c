@@ -80,13 +80,15 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
     rm.excite_mask = 0x3U; /* dw/dt and w; not the constant */
     if ((canfdi_svf_init(&e->svf_u, &cfg->svf) == CANFDI_OK) &&
         (canfdi_svf_init(&e->svf_i, &cfg->svf) == CANFDI_OK) &&
-        (canfdi_svf_init(&e->svf_w, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->arm, &ra) == CANFDI_OK) &&
+        (canfdi_svf_init(&e->svf_w, &cfg->svf) == CANFDI_OK) &&
+        (canfdi_svf_init(&e->svf_l, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->arm, &ra) == CANFDI_OK) &&
         (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
       e->cfg = *cfg;
       e->diag.steps = 0U;
       e->diag.arm_updates = 0U;
       e->diag.mech_updates = 0U;
       e->diag.resets = 0U;
+      e->dload_q16 = 0;
       canfdi_est_dcm_reset(e, false);
       e->diag.resets = 0U;
       out = CANFDI_OK;
@@ -105,9 +107,23 @@ void canfdi_est_dcm_reset(canfdi_est_dcm_t *e, bool keep_theta)
   }
   e->phase = 0U;
   e->started = false;
+  /* the known load offset is an input, kept across resets */
   e->arm_since_reset = 0U;
   e->mech_since_reset = 0U;
   e->diag.resets += 1U;
+}
+
+/* Psi for the mechanical conversion: the estimate once it has converged
+ * (the armature estimator keeps it positive near the nominal value). */
+static int32_t psi_for_mech_q16(const canfdi_est_dcm_t *e)
+{
+  return canfdi_est_dcm_arm_converged(e) ? canfdi_est_dcm_psi_q16(e) : e->cfg.psi_nom_q16;
+}
+
+void canfdi_est_dcm_set_load_offset(canfdi_est_dcm_t *e, int32_t dload_q16)
+{
+  CANFDI_ASSERT(e != NULL);
+  e->dload_q16 = dload_q16;
 }
 
 void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, int32_t w_q16)
@@ -117,11 +133,13 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
     canfdi_svf_reset(&e->svf_u, ua_q16);
     canfdi_svf_reset(&e->svf_i, ia_q16);
     canfdi_svf_reset(&e->svf_w, w_q16);
+    canfdi_svf_reset(&e->svf_l, e->dload_q16);
     e->started = true;
   } else {
     canfdi_svf_step(&e->svf_u, ua_q16);
     canfdi_svf_step(&e->svf_i, ia_q16);
     canfdi_svf_step(&e->svf_w, w_q16);
+    canfdi_svf_step(&e->svf_l, e->dload_q16);
     e->phase = (uint8_t)(e->phase + 1U);
     if (e->phase >= e->cfg.decim) {
       e->phase = 0U;
@@ -143,8 +161,15 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       int32_t phi[3];
       phi[0] = canfdi_svf_dy_q16(&e->svf_w);
       phi[1] = canfdi_svf_y_q16(&e->svf_w);
+      /* The known load change, filtered like I_A, moves to the output side
+       * as the current it needs: y = I_f - dM_L,f / Psi (Psi as used for
+       * the read-outs). Scaling: Q16.16 N m / Q16.16 V s -> Q16.16 A,
+       * saturating division and subtraction. */
+      const int32_t y = canfdi_sub_s32_sat(
+          canfdi_svf_y_q16(&e->svf_i),
+          canfdi_div_s32_qn(canfdi_svf_y_q16(&e->svf_l), psi_for_mech_q16(e), 16U));
       phi[2] = ONE_Q16;
-      if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
+      if (canfdi_rls_update(&e->mech, phi, y)) {
         e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
         e->diag.mech_updates += 1U;
       }
@@ -168,11 +193,6 @@ int32_t canfdi_est_dcm_psi_q16(const canfdi_est_dcm_t *e)
   return canfdi_rls_theta_qn(&e->arm, 2U, 16U);
 }
 
-/* Psi for the mechanical conversion: the estimate once it has converged. */
-static int32_t psi_for_mech_q16(const canfdi_est_dcm_t *e)
-{
-  return canfdi_est_dcm_arm_converged(e) ? canfdi_est_dcm_psi_q16(e) : e->cfg.psi_nom_q16;
-}
 
 /* Scaling: Q16.16 Psi x Q24 ratio, rounded shift by 16 -> Q24, saturated. */
 int32_t canfdi_est_dcm_j_q24(const canfdi_est_dcm_t *e)
@@ -185,9 +205,13 @@ int32_t canfdi_est_dcm_mf1_q24(const canfdi_est_dcm_t *e)
   return canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 1U, 24U), 16U);
 }
 
+/* The lumped M_c: the estimated constant plus the known load offset it
+ * excludes (saturating). */
 int32_t canfdi_est_dcm_mc_q16(const canfdi_est_dcm_t *e)
 {
-  return canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 2U, 16U), 16U);
+  return canfdi_add_s32_sat(
+      canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 2U, 16U), 16U),
+      e->dload_q16);
 }
 
 bool canfdi_est_dcm_excited(const canfdi_est_dcm_t *e)

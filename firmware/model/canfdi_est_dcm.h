@@ -18,6 +18,15 @@
  *                the armature estimate (the nominal Psi until that one has
  *                converged). A speed-proportional load share (fan) is not
  *                separable from M_F1 and is reported inside M_F1.
+ * Known load: canfdi_est_dcm_set_load_offset() gives dM_L, the known
+ * change of the load from the operating point that cfg.mc_nom_q16 includes
+ * (e.g. a load torque the vehicle reports minus the nominal load). It is
+ * filtered by its own SVF and moved to the output side of the mechanical
+ * equation, y = I_A - dM_L / Psi, so a known load step does not disturb
+ * the RLS; theta_m[2] then estimates M_c - dM_L, and canfdi_est_dcm_mc_q16
+ * adds dM_L back: the read-out stays the lumped M_c, comparable with
+ * mc_nom + dM_L. Default 0 (the load is unknown, as above); kept across
+ * resets.
  * Filtering: one SVF per measured signal (U_A, I_A, w), all with the same
  * configuration, shared by both equations — every signal of an equation sees
  * the same filter, so the filtered signals obey the same equations.
@@ -47,13 +56,14 @@
  * (their values are 1e-3 .. 1e-2; Q24 resolves 6e-8, i.e. < 1e-4
  * relative), M_c Q16.16 N m. Read-outs saturate.
  *
- * Cost per step: 3 SVF steps (order 2) every step, plus one RLS update of
+ * Cost per step: 4 SVF steps (order 2; the fourth filters the known load
+ * offset) every step, plus one RLS update of
  * 3 parameters on two of every `decim` steps (never both in one step).
  * Measured on the host (x86-64, gcc -O2, callgrind): mean 3.9 k
  * instructions per step with decim 5; worst-case step = 3 SVF + 1 RLS
  * update ~ 0.9 k + 7.6 k = 8.5 k. Cortex-M0+ estimate ~15 k for the worst
- * step (see canfdi_rls.h). Memory: sizeof(canfdi_est_dcm_t) = 1272 bytes on a 32-bit target
- * (three SVFs and two RLS instances sized CANFDI_CFG_RLS_MAX_PARAMS).
+ * step (see canfdi_rls.h). Memory: sizeof(canfdi_est_dcm_t) = 1376 bytes on a 32-bit target
+ * (four SVFs and two RLS instances sized CANFDI_CFG_RLS_MAX_PARAMS).
  */
 #ifndef CANFDI_EST_DCM_H
 #define CANFDI_EST_DCM_H
@@ -100,12 +110,14 @@ typedef struct {
   canfdi_svf_t svf_u;
   canfdi_svf_t svf_i;
   canfdi_svf_t svf_w;
+  canfdi_svf_t svf_l;     /* known load offset dM_L */
   canfdi_rls_t arm;
   canfdi_rls_t mech;
   uint8_t phase;          /* step counter modulo decim */
   bool started;           /* filters reset on the first sample */
   uint32_t arm_since_reset;
   uint32_t mech_since_reset;
+  int32_t dload_q16;      /* known load offset, Q16.16 N m */
   canfdi_est_dcm_diag_t diag;
 } canfdi_est_dcm_t;
 
@@ -128,6 +140,10 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
 /* Back to the nominal parameters and P0; the filters restart on the next
  * sample. keep_theta: covariance reset only. Cannot fail. */
 void canfdi_est_dcm_reset(canfdi_est_dcm_t *e, bool keep_theta);
+
+/* The known load offset dM_L (Q16.16 N m, see the header) used from the
+ * next step on until changed. Cannot fail. Cost: O(1). */
+void canfdi_est_dcm_set_load_offset(canfdi_est_dcm_t *e, int32_t dload_q16);
 
 /* One 1 ms step with the measurements (Q16.16: V, A, rad/s). Cannot fail. */
 void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, int32_t w_q16);

@@ -379,6 +379,9 @@ int main(int argc, char **argv)
       struct canfdi_sil_msg_setpoint_thr_t spt;
       memset(d, 0, sizeof d);
       spd.sp_dcm_speed = canfdi_sil_msg_setpoint_dcm_sp_dcm_speed_encode(sp.speed_rad_s);
+      /* The vehicle knows the load it applies (the scenario's load profile;
+       * a `load fan` share is not sent: it stays unknown to the ECU). */
+      spd.sp_dcm_load = canfdi_sil_msg_setpoint_dcm_sp_dcm_load_encode(sp.load_Nm);
       (void)canfdi_sil_msg_setpoint_dcm_pack(d, &spd, sizeof d);
       (void)canfdi_app_rx_frame(&app, CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID, d, 8U, now_us);
       log_frame(log, channel, t_us, CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID, d, 8U);

@@ -120,6 +120,65 @@ START_TEST(test_self_diagnostics)
 }
 END_TEST
 
+/* SetpointDcm with raw speed and load (DBC: both signed 16 bit, little
+ * endian, bits 0..15 and 16..31). */
+static void send_sp_dcm(int16_t speed_raw, int16_t load_raw, uint32_t now_us)
+{
+  uint8_t d[8];
+  const uint16_t s = (uint16_t)speed_raw;
+  const uint16_t l = (uint16_t)load_raw;
+  memset(d, 0, sizeof d);
+  d[0] = (uint8_t)(s & 0xFFU);
+  d[1] = (uint8_t)(s >> 8);
+  d[2] = (uint8_t)(l & 0xFFU);
+  d[3] = (uint8_t)(l >> 8);
+  (void)canfdi_app_rx_frame(&app, 0x100U, d, 8U, now_us);
+}
+
+/* The load the models get: the estimator's known offset from the nominal
+ * load (0 = nominal), within 1 LSB of the 0.001 N m raw value. */
+static int32_t dload_q16(void) { return app.est_dcm.dload_q16; }
+
+/* The vehicle's load feed-forward reaches the models; before the first
+ * frame, after a timeout (50 ms) and when out of range (+-10 N m) the
+ * nominal load stands in, and a rejected load does not cost the speed. */
+START_TEST(test_load_feed_forward)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  int32_t d07;
+  uint32_t k;
+  canfdi_app_default_cal(&cal);
+  d07 = (int32_t)((700 * 65536 + 500) / 1000) - cal.load_nom_Nm_q16;
+  ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+  ck_assert_int_eq(canfdi_app_step(&app, 1000U, out) >= 2, 1);
+  ck_assert_int_eq(dload_q16(), 0);
+  for (k = 2U; k <= 100U; k++) {
+    if ((k % 10U) == 0U) {
+      send_sp_dcm(2500, 700, k * 1000U); /* 50 rad/s, 0.7 N m */
+    }
+    (void)canfdi_app_step(&app, k * 1000U, out);
+  }
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_DCM_LOAD].quality, CANFDI_RX_VALID);
+  ck_assert_int_le(abs(dload_q16() - d07), 1);
+  /* frames stop: nominal after the 50 ms timeout */
+  for (k = 101U; k <= 200U; k++) {
+    (void)canfdi_app_step(&app, k * 1000U, out);
+  }
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_DCM_LOAD].quality, CANFDI_RX_SUBSTITUTED);
+  ck_assert_int_eq(dload_q16(), 0);
+  /* implausible load (12 N m), plausible speed: load nominal, speed taken */
+  send_sp_dcm(-1000, 12000, 201000U);
+  (void)canfdi_app_step(&app, 201000U, out);
+  ck_assert_int_eq(dload_q16(), 0);
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_DCM_SPEED].quality, CANFDI_RX_VALID);
+  ck_assert_int_eq(app.rx.in[CANFDI_RX_IN_SP_DCM_SPEED].value_q16, -20 * 65536);
+  /* a plausible load again: taken at once (setpoints recover after 1) */
+  send_sp_dcm(-1000, -300, 202000U);
+  (void)canfdi_app_step(&app, 202000U, out);
+  ck_assert_int_le(abs(dload_q16() - ((int32_t)((-300 * 65536 - 500) / 1000) - cal.load_nom_Nm_q16)), 1);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("app");
@@ -130,6 +189,7 @@ static Suite *make_suite(void)
   tc = tcase_create("supervision");
   tcase_add_test(tc, test_no_sensor_frames);
   tcase_add_test(tc, test_self_diagnostics);
+  tcase_add_test(tc, test_load_feed_forward);
   suite_add_tcase(s, tc);
   return s;
 }

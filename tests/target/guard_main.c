@@ -346,6 +346,7 @@ static void guard_est_dcm(void)
   canfdi_est_dcm_default_cfg(&cfg);
   sink32(canfdi_est_dcm_init(&est, &cfg));
   canfdi_est_dcm_reset(&est, in_n != 0U);
+  canfdi_est_dcm_set_load_offset(&est, in_s32[2]);
   canfdi_est_dcm_step(&est, in_s32[0], in_s32[1], in_s32[2]);
   sink32(canfdi_est_dcm_ra_q16(&est));
   sink32(canfdi_est_dcm_la_q24(&est));

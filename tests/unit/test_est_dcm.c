@@ -18,7 +18,12 @@
  *     trace bound at every step (canfdi_rls_invariants_hold), the estimates
  *     stay within 5 % of the truth during the constant stretch (they are
  *     held, not wound up) and re-converge after it;
- *   - a full reset re-converges within 2 s of excitation.
+ *   - a full reset re-converges within 2 s of excitation;
+ *   - a +0.5 N m load step given as the known load offset
+ *     (canfdi_est_dcm_set_load_offset) leaves the lumped M_c within 3 % of
+ *     the nominal M_c (the diagnosis's friction threshold) of the new truth
+ *     and J within 5 % at every step after it, while the same step unknown
+ *     moves M_c by more than that (the test discriminates).
  */
 #include <check.h>
 #include <math.h>
@@ -59,6 +64,17 @@ typedef struct {
 } rig_t;
 
 static rig_t rig; /* large: static */
+
+/* Load step of the plant: at load_step_k, by load_step_Nm; the offset is
+ * told to the estimator when load_known. */
+static long load_step_k = -1;
+static double load_step_Nm = 0.0;
+static bool load_known = false;
+
+static double load_at(long k)
+{
+  return LOAD_NM + (((load_step_k >= 0) && (k >= load_step_k)) ? load_step_Nm : 0.0);
+}
 
 static int32_t q16(double x)
 {
@@ -121,8 +137,12 @@ static void rig_step(void)
   memset(&in, 0, sizeof in);
   canfdi_sim_refctl_step(&rig.ctl, canfdi_sim_profile_eval(&rig.speed, (int64_t)rig.k * 1000), 30.0, &rig.sim.meas,
                          &in);
-  in.dcm.load_Nm = LOAD_NM;
+  in.dcm.load_Nm = load_at(rig.k);
   canfdi_sim_step(&rig.sim, &in);
+  if (load_known) {
+    /* the load of the interval that ends with this sample */
+    canfdi_est_dcm_set_load_offset(&rig.est, q16(load_at(rig.k) - LOAD_NM));
+  }
   canfdi_est_dcm_step(&rig.est, q16(rig.sim.meas.value[CANFDI_SIM_S_DCM_UA]),
                       q16(rig.sim.meas.value[CANFDI_SIM_S_DCM_IA]), q16(rig.sim.meas.value[CANFDI_SIM_S_DCM_SPEED]));
   rig.k++;
@@ -204,6 +224,59 @@ START_TEST(test_accuracy_and_step)
     /* and it settles at the new value (within the 2 % accuracy band) */
     CHECK(fabs(ra() / (RA_TRUE * 1.1) - 1.0) <= 0.02);
   }
+}
+END_TEST
+
+/* ---- known load step --------------------------------------------------- */
+
+static double mc(void)
+{
+  return (double)canfdi_est_dcm_mc_q16(&rig.est) / 65536.0;
+}
+
+/* Largest |M_c - (M_F0 + M_L)| and |J / J_true - 1| after a +0.5 N m load
+ * step at 10 s (until 15 s), with the step known or not. */
+static void run_load_step(uint64_t seed, bool known, double *mc_err, double *j_err)
+{
+  const double mc_nom = 0.11 + LOAD_NM;
+  rig_init(seed, 1.0, 1e4, 0, 0, 0, 0);
+  load_step_k = 10000;
+  load_step_Nm = 0.5;
+  load_known = known;
+  *mc_err = 0.0;
+  *j_err = 0.0;
+  while (rig.k < 15000) {
+    rig_step();
+    if (rig.k == 9999) {
+      CHECK(fabs(mc() - mc_nom) <= 0.03 * mc_nom); /* settled before the step */
+    }
+    if (rig.k > 10000) { /* rig.k - 1: the step just taken */
+      const double e = fabs(mc() - (0.11 + load_at(rig.k - 1)));
+      const double ej = fabs(jj() / J_TRUE - 1.0);
+      *mc_err = (e > *mc_err) ? e : *mc_err;
+      *j_err = (ej > *j_err) ? ej : *j_err;
+    }
+  }
+  load_step_k = -1;
+  load_known = false;
+}
+
+START_TEST(test_known_load_step)
+{
+  const uint64_t seed = 1U + (uint64_t)_i;
+  const double tol = 0.03 * (0.11 + LOAD_NM); /* diagnosis threshold, N m */
+  double mk;
+  double jk;
+  double mu;
+  double ju;
+  run_load_step(seed, true, &mk, &jk);
+  run_load_step(seed, false, &mu, &ju);
+  SHOW("est_dcm seed %u, +0.5 N m load step: known max |dM_c| %.4f N m, max |dJ| %.2f %%; "
+       "unknown %.4f N m, %.2f %%\n",
+       (unsigned)seed, mk, 100 * jk, mu, 100 * ju);
+  CHECK(mk < tol);
+  CHECK(jk < 0.05);
+  CHECK(mu > tol);
 }
 END_TEST
 
@@ -344,6 +417,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_accuracy_and_step, 0, 3);
   tcase_add_loop_test(tc, test_no_excitation_60s, 0, 3);
   tcase_add_loop_test(tc, test_reset_recovery, 0, 3);
+  tcase_add_loop_test(tc, test_known_load_step, 0, 3);
   suite_add_tcase(s, tc);
   return s;
 }

@@ -67,7 +67,7 @@ static double phys(int64_t raw, int64_t sn, int64_t sd, int64_t on, int64_t od)
 static const char *const input_sig[CANFDI_RX_IN_COUNT] = {
     "DCM_SENSOR_DCM_UA",   "DCM_SENSOR_DCM_IA",   "DCM_SENSOR_DCM_OMEGA", "DCM_SENSOR_DCM_USUPPLY",
     "THR_SENSOR_THR_TPS1", "THR_SENSOR_THR_TPS2", "THR_SENSOR_THR_IMOT",  "THR_SENSOR_THR_USUPPLY",
-    "SETPOINT_DCM_SP_DCM_SPEED", "SETPOINT_THR_SP_THR_ANGLE"};
+    "SETPOINT_DCM_SP_DCM_SPEED", "SETPOINT_DCM_SP_DCM_LOAD", "SETPOINT_THR_SP_THR_ANGLE"};
 
 static const sig_t *find_sig(const char *name)
 {
@@ -231,6 +231,7 @@ static void make_sp_dcm(uint8_t *d, int16_t raw)
 {
   struct canfdi_sim_msg_setpoint_dcm_t m;
   m.sp_dcm_speed = raw;
+  m.sp_dcm_load = 1200; /* 1.2 N m, plausible */
   ck_assert_int_eq(canfdi_sim_msg_setpoint_dcm_pack(d, &m, 8U), 8);
 }
 
@@ -981,10 +982,28 @@ START_TEST(random_flood_never_yields_unflagged_invalid_values)
           bool ok;
           if (id == 0x100U) {
             struct canfdi_msg_setpoint_dcm_t m;
+            int32_t rl;
+            bool ok_l;
             CHECK(canfdi_msg_setpoint_dcm_unpack(&m, d, 8U) == 0, "unpack");
             r = m.sp_dcm_speed;
             ok = (r >= CANFDI_RAW_SETPOINT_DCM_SP_DCM_SPEED_MIN) &&
                  (r <= CANFDI_RAW_SETPOINT_DCM_SP_DCM_SPEED_MAX);
+            /* the load is judged on its own: taken if plausible whatever
+             * the speed, and the frame is IMPLAUSIBLE if either is not */
+            rl = m.sp_dcm_load;
+            ok_l = (rl >= CANFDI_RAW_SETPOINT_DCM_SP_DCM_LOAD_MIN) &&
+                   (rl <= CANFDI_RAW_SETPOINT_DCM_SP_DCM_LOAD_MAX);
+            if (ok_l) {
+              ref[CANFDI_RX_IN_SP_DCM_LOAD] = input_phys(CANFDI_RX_IN_SP_DCM_LOAD, rl);
+              ref_has[CANFDI_RX_IN_SP_DCM_LOAD] = true;
+              ref_t[CANFDI_RX_IN_SP_DCM_LOAD] = now;
+            }
+            if (ok) {
+              ref[i] = input_phys(i, r);
+              ref_has[i] = true;
+              ref_t[i] = now;
+            }
+            ok = ok && ok_l;
           } else {
             struct canfdi_msg_setpoint_thr_t m;
             CHECK(canfdi_msg_setpoint_thr_unpack(&m, d, 8U) == 0, "unpack");
