@@ -33,16 +33,12 @@
 #include "canfdi_sim.h" /* host_sim plant library (double precision) */
 #include "ctrl/canfdi_ctrl_dcm.h"
 #include "unit_main.h"
+#include "unit_q16.h"
 
 #define SHOW(...) (void)(printf(__VA_ARGS__), fflush(stdout))
 
 #define LOAD_NM 1.2
 #define N_SEEDS 3
-
-static int32_t q16(double x)
-{
-  return (int32_t)lround(x * 65536.0);
-}
 
 static double dq(int32_t x)
 {

@@ -37,6 +37,7 @@
 #include "canfdi_sim_refctl.h"
 #include "ctrl/canfdi_ctrl_thr.h"
 #include "unit_main.h"
+#include "unit_q16.h"
 
 #define SHOW(...) (void)(printf(__VA_ARGS__), fflush(stdout))
 
@@ -44,11 +45,6 @@
 #define TWO_PI 6.283185307179586
 #define N_SEEDS 3
 #define LH_DEG 6.5
-
-static int32_t q16(double x)
-{
-  return (int32_t)lround(x * 65536.0);
-}
 
 static double dq(int32_t x)
 {

@@ -37,6 +37,7 @@
 #include "canfdi_sim_refctl.h"
 #include "model/canfdi_est_dcm.h"
 #include "unit_main.h"
+#include "unit_q16.h"
 
 /* figures are printed before the checks; flush so an abort cannot lose them */
 #define SHOW(...) (void)(printf(__VA_ARGS__), fflush(stdout))
@@ -74,11 +75,6 @@ static bool load_known = false;
 static double load_at(long k)
 {
   return LOAD_NM + (((load_step_k >= 0) && (k >= load_step_k)) ? load_step_Nm : 0.0);
-}
-
-static int32_t q16(double x)
-{
-  return (int32_t)lround(x * 65536.0);
 }
 
 static double ra(void)

@@ -48,6 +48,7 @@
 #include "canfdi_sim_refctl.h"
 #include "model/canfdi_est_thr.h"
 #include "unit_main.h"
+#include "unit_q16.h"
 
 /* figures are printed before the checks; flush so an abort cannot lose them */
 #define SHOW(...) (void)(printf(__VA_ARGS__), fflush(stdout))
@@ -71,11 +72,6 @@ typedef struct {
 } rig_t;
 
 static rig_t rig;
-
-static int32_t q16(double x)
-{
-  return (int32_t)lround(x * 65536.0);
-}
 
 /* excitation over [0.5 s, t_exc_end) and again from t_exc2 on */
 static void rig_init(uint64_t seed, double t_exc_end, double t_exc2)

@@ -32,28 +32,13 @@
 #include "core/canfdi_common.h"
 #include "model/canfdi_parity_dcm.h"
 #include "unit_main.h"
+#include "unit_q16.h"
 
 #define N_RES CANFDI_PARITY_DCM_N_RES
 #define LOAD_NM 1.2
 #define W_REF 100.0
 
 static const char *const res_name[N_RES] = {"r1[V]", "r2[Nm]", "r3[Nm]", "r4[V]"};
-
-static int32_t q16(double x)
-{
-  double y = x * 65536.0;
-  if (y > 2147483647.0) {
-    y = 2147483647.0;
-  } else if (y < -2147483648.0) {
-    y = -2147483648.0;
-  }
-  return (int32_t)lround(y);
-}
-
-static double fq16(int32_t x)
-{
-  return (double)x / 65536.0;
-}
 
 /* ---- a closed-loop run ---------------------------------------------------- */
 

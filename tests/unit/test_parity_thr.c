@@ -29,26 +29,11 @@
 #include "core/canfdi_common.h"
 #include "model/canfdi_parity_thr.h"
 #include "unit_main.h"
+#include "unit_q16.h"
 
 #define N_RES CANFDI_PARITY_THR_N_RES
 
 static const char *const res_name[N_RES] = {"corr[V]", "arm[V]", "pos1[rad]", "pos2[rad]"};
-
-static int32_t q16(double x)
-{
-  double y = x * 65536.0;
-  if (y > 2147483647.0) {
-    y = 2147483647.0;
-  } else if (y < -2147483648.0) {
-    y = -2147483648.0;
-  }
-  return (int32_t)lround(y);
-}
-
-static double fq16(int32_t x)
-{
-  return (double)x / 65536.0;
-}
 
 typedef struct {
   double sum[N_RES];

@@ -28,6 +28,7 @@
 
 #include "model/canfdi_rls.h"
 #include "unit_main.h"
+#include "unit_q16.h"
 
 /* figures are printed before the checks; flush so an abort cannot lose them */
 #define SHOW(...) (void)(printf(__VA_ARGS__), fflush(stdout))
@@ -60,11 +61,6 @@ static double rng_n(void)
   const double u1 = rng_u() + 1e-300;
   const double u2 = rng_u();
   return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
-}
-
-static int32_t q16(double x)
-{
-  return (int32_t)lround(x * Q16);
 }
 
 static void base_cfg(canfdi_rls_cfg_t *c, int n)
