@@ -121,26 +121,9 @@ static void rig_step(void)
   rig.k++;
 }
 
-typedef struct {
-  double s;
-  double s2;
-  long n;
-} stat_t;
-
-static void st_add(stat_t *st, double v)
-{
-  st->s += v;
-  st->s2 += v * v;
-  st->n++;
-}
-static double st_mean(const stat_t *st)
-{
-  return st->s / (double)st->n;
-}
 static double st_rsd(const stat_t *st)
 {
-  const double m = st_mean(st);
-  return sqrt(fmax(0.0, st->s2 / (double)st->n - m * m)) / fabs(m);
+  return st_sd(st) / fabs(st_mean(st));
 }
 
 #define NP 9
