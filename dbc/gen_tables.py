@@ -372,7 +372,8 @@ def q_round(x) -> int:
 
 
 def sig_conversions(dbc_text: str) -> list[dict]:
-    """Conversion constants of every signal whose raw value fits 32 bits.
+    """Conversion constants of every signal shorter than 32 bits (a 32-bit
+    raw value is a counter or an index, never a Q16.16 physical value).
     All arithmetic is exact on Fractions of the DBC text; only the final
     constants are rounded (half up). Signals in degrees get a second set in
     radians (the firmware works in SI units)."""
@@ -386,7 +387,7 @@ def sig_conversions(dbc_text: str) -> list[dict]:
             message = m.group(2)
             continue
         m = SG_UNIT_RE.match(line)
-        if not m or int(m.group(3)) > 32:
+        if not m or int(m.group(3)) >= 32:
             continue
         length, signed = int(m.group(3)), m.group(5) == "-"
         scale, offset = Fraction(m.group(6)), Fraction(m.group(7))
