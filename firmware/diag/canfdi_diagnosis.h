@@ -55,12 +55,12 @@
  * The rule table (CANFDI_FAULT_* of the catalogue; pol b = bipolar):
  *   DC motor           pol  r1 r2 r3 r4 | RA Psi J Mc | J/Psi UAC
  *   1 dcm_ra_up         u   +  Z  .  +  | P  Z   .  .  | .     0
- *   2 dcm_flux_down     u   -  +  +  N  | 0  N   .  .  | .     0
+ *   2 dcm_flux_down     u   N  +  +  -  | 0  N   .  .  | P     0
  *   3 dcm_friction_up   u   Z  P  P  +  | 0  0   .  +  | .     0
  *   4 dcm_ia_offset     b   N  P  P  Z  | .  .   .  .  | 0     0
- *   5 dcm_speed_gain    b   -  .  Z  -  | 0  .   .  .  | N     0
+ *   5 dcm_speed_gain    b   -  .  Z  -  | 0  -   .  .  | N     0
  *   6 dcm_speed_offset  b   -  Z  Z  -  | 0  N   .  .  | Z     Z
- *   7 dcm_ua_offset     b   +  Z  Z  +  | 0  +   .  .  | 0     P
+ *   7 dcm_ua_offset     b   +  Z  0  +  | 0  +   .  .  | 0     P
  *   throttle           pol  CORR ARM POS1 POS2 | R  K  spring friction
  *   14 thr_tps1_drift   b   P    Z   P    Z    | .  .  .      .
  *   15 thr_tps2_drift   b   P    Z   Z    N    | .  .  .      .
@@ -83,6 +83,18 @@
  *   15 thr_tps2_drift                     TPS2_OUTLIER      TPS1_OUTLIER
  *   19 thr_motor_open                     THR_NO_CURRENT    -
  *   20 thr_jammed                         THR_NOT_FOLLOWING THR_NO_CURRENT
+ * Three entries follow the application rather than the open-loop bench:
+ * flux down needs r1, Psi and J/Psi (J/Psi + is its alone) and only
+ * supports r2..r4, because the application's load tracking (parity_dcm
+ * load_tau 1 s) pulls a persistent torque mismatch out of r2..r4 within a
+ * few seconds, after which the old pattern (r2, r3 necessary) no longer
+ * matched and the runner-up (speed gain, or I_A offset while r4 was back
+ * in band) was confirmed 2.3-3 s after the true P1A11; the speed-gain rule
+ * supports Psi '-' (bench: -4.8 % at +5 %), which flux down contradicts.
+ * U_A offset: r3 is 0 in steady state but swings for ~0.1 s after a step
+ * (the offset enters r3 through the derivative terms), so it supports
+ * instead of being necessary; the UAC channel (necessary) is what tells it
+ * from the omega offset. SIL: P1A22 45-60 ms instead of 145 ms.
  * The throttle's mechanical parameters are converted from the estimated
  * ratios with the electrical estimate of K (canfdi_est_thr.h), so a K
  * error moves all of them: spring and friction need K at zero (measured:

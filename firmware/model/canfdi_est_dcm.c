@@ -28,6 +28,7 @@ void canfdi_est_dcm_default_cfg(canfdi_est_dcm_cfg_t *cfg)
   cfg->j_nom_q24 = (int32_t)CANFDI_QN_RATIO_(192, 100000, 24);
   cfg->mf1_nom_q24 = (int32_t)CANFDI_QN_RATIO_(36, 100000, 24);
   cfg->mc_nom_q16 = (int32_t)CANFDI_QN_RATIO_(131, 100, 16);
+  cfg->load_hold_steps = 0U;
 }
 
 static void rls_cfg_common(canfdi_rls_cfg_t *rc, const canfdi_est_dcm_cfg_t *cfg)
@@ -88,7 +89,9 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
       e->diag.arm_updates = 0U;
       e->diag.mech_updates = 0U;
       e->diag.resets = 0U;
+      e->diag.load_hold_skips = 0U;
       e->dload_q16 = 0;
+      e->load_hold = 0U;
       canfdi_est_dcm_reset(e, false);
       e->diag.resets = 0U;
       out = CANFDI_OK;
@@ -123,6 +126,9 @@ static int32_t psi_for_mech_q16(const canfdi_est_dcm_t *e)
 void canfdi_est_dcm_set_load_offset(canfdi_est_dcm_t *e, int32_t dload_q16)
 {
   CANFDI_ASSERT(e != NULL);
+  if (dload_q16 != e->dload_q16) {
+    e->load_hold = e->cfg.load_hold_steps;
+  }
   e->dload_q16 = dload_q16;
 }
 
@@ -157,7 +163,9 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       }
     }
     /* the mechanical update one step later (same step when decim == 1) */
-    if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
+    if ((e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) && (e->load_hold > 0U)) {
+      e->diag.load_hold_skips += 1U;
+    } else if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
       int32_t phi[3];
       phi[0] = canfdi_svf_dy_q16(&e->svf_w);
       phi[1] = canfdi_svf_y_q16(&e->svf_w);
@@ -174,6 +182,9 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
         e->diag.mech_updates += 1U;
       }
     }
+  }
+  if (e->load_hold > 0U) {
+    e->load_hold = (uint16_t)(e->load_hold - 1U);
   }
   e->diag.steps += 1U;
 }

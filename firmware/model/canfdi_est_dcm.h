@@ -96,6 +96,9 @@ typedef struct {
   int32_t j_nom_q24;    /* kg m^2 */
   int32_t mf1_nom_q24;  /* N m s */
   int32_t mc_nom_q16;   /* N m, lumped Coulomb friction + load */
+  uint16_t load_hold_steps; /* 0: off; else no mechanical update for this many
+                             * steps after the known load offset changed
+                             * (late load, see canfdi_est_dcm_set_load_offset) */
 } canfdi_est_dcm_cfg_t;
 
 typedef struct {
@@ -103,6 +106,7 @@ typedef struct {
   uint32_t arm_updates;   /* armature RLS updates applied */
   uint32_t mech_updates;  /* mechanical RLS updates applied */
   uint32_t resets;
+  uint32_t load_hold_skips; /* mechanical updates skipped: late-load hold */
 } canfdi_est_dcm_diag_t;
 
 typedef struct {
@@ -118,6 +122,7 @@ typedef struct {
   uint32_t arm_since_reset;
   uint32_t mech_since_reset;
   int32_t dload_q16;      /* known load offset, Q16.16 N m */
+  uint16_t load_hold;     /* steps left of the late-load hold */
   canfdi_est_dcm_diag_t diag;
 } canfdi_est_dcm_t;
 
@@ -142,7 +147,16 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
 void canfdi_est_dcm_reset(canfdi_est_dcm_t *e, bool keep_theta);
 
 /* The known load offset dM_L (Q16.16 N m, see the header) used from the
- * next step on until changed. Cannot fail. Cost: O(1). */
+ * next step on until changed. Cannot fail. Cost: O(1).
+ * Late load: a known load that arrives over a bus lags the true one by up
+ * to a frame cycle, and for that lag the mechanical equation carries the
+ * whole step as an unexplained torque. The filtered signals keep the
+ * mismatch after the new value arrives, for the tail of the SVF's step
+ * response, e^-x (1 + x) at x = wc t for order 2, below 1e-3 from
+ * x = 9.23 on. A change of the value therefore closes the mechanical
+ * update for cfg.load_hold_steps steps (ceil(9.23 / (wc T)) = 47 at
+ * 200 rad/s; diag.load_hold_skips); the <= lag / (decim T) updates made
+ * before the change was known remain (2 at 10 ms and decim 5). */
 void canfdi_est_dcm_set_load_offset(canfdi_est_dcm_t *e, int32_t dload_q16);
 
 /* One 1 ms step with the measurements (Q16.16: V, A, rad/s). Cannot fail. */

@@ -285,6 +285,7 @@ int32_t canfdi_parity_dcm_init(canfdi_parity_dcm_t *p, const canfdi_parity_dcm_c
       p->diag.ra_updates = 0U;
       p->diag.ra_blocks_rejected = 0U;
       p->diag.ra_limit_hits = 0U;
+      p->diag.load_holds = 0U;
       canfdi_parity_dcm_reset(p);
       p->diag.resets = 0U;
     }
@@ -302,6 +303,8 @@ void canfdi_parity_dcm_reset(canfdi_parity_dcm_t *p)
     p->primed = false;
     p->settle = p->cfg->settle_steps;
     p->w_ok = 0U;
+    p->load_hold = 0U;
+    p->load_prev_q16 = 0;
     p->ra_learn_left = (p->cfg->ra_track != 0U) ? p->cfg->ra_learn_blocks : 0U;
     p->i_prev_q16 = 0;
     p->w_prev_q16 = 0;
@@ -481,6 +484,12 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
                                -PDCM_ONE_Q16, PDCM_ONE_Q16);
     z = canfdi_add_s32_sat(in->load_Nm_q16, canfdi_mul_s32_qn(c->mf0_Nm_q24, sgn_q16, 24U));
 
+    /* Late load: a change of the known load holds r2..r4 (header). */
+    if (p->primed && (in->load_Nm_q16 != p->load_prev_q16) && (c->load_hold_steps != 0U)) {
+      p->load_hold = c->load_hold_steps;
+      p->diag.load_holds = (p->diag.load_holds < UINT32_MAX) ? (p->diag.load_holds + 1U) : UINT32_MAX;
+    }
+    p->load_prev_q16 = in->load_Nm_q16;
     if (!p->primed) {
       canfdi_svf_reset(&p->svf_u, in->u_V_q16);
       canfdi_svf_reset(&p->svf_i, xi);
@@ -593,9 +602,12 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
       /* r1 and r4 carry R_A: not evaluable while it is being learnt. */
       const bool ra_ok = (p->ra_learn_left == 0U);
       valid = ra_ok ? 1U : 0U;
-      if (p->w_ok >= c->settle_steps) {
+      if ((p->w_ok >= c->settle_steps) && (p->load_hold == 0U)) {
         valid |= ra_ok ? 0x0EU : 0x06U;
       }
+    }
+    if (p->load_hold > 0U) {
+      p->load_hold = (uint16_t)(p->load_hold - 1U);
     }
 
     /* Slowly varying load: r2..r4 follow their own mean (time constant
@@ -702,6 +714,7 @@ void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
     cfg->ra_min_ohm_q24 = PDCM_Q24(100, 100);
     cfg->ra_max_ohm_q24 = PDCM_Q24(200, 100);
     cfg->load_tau_s = 0U;
+    cfg->load_hold_steps = 0U;
     /* Stated uncertainties (derivation in the header, "Thresholds"):
      * dR 10 mOhm = the tracker's lag bound, heating rate 0.17 mOhm/s times
      * ra_tau 60 s; dL 2 % and dJ 2 % = the identification class of the

@@ -48,6 +48,21 @@
  * (only while valid), which keeps each residual's decoupling exactly (no
  * residual borrows another's signals) but makes r2..r4 blind to deviations
  * slower than load_tau; r1 is unaffected. Default: off (input only).
+ * Late load (cfg.load_hold_steps). A known load that reaches the ECU over
+ * a bus arrives up to one frame cycle (plus the step alignment) after the
+ * plant's torque changed: for that lag d the true and the known load
+ * differ by the whole step dM, a pulse of width d that the SVF spreads
+ * into r2..r4 (r1 has no M_L) for as long as its impulse response lasts.
+ * The difference of the filtered true and known load after the known one
+ * changed is dM (S(t - t_true) - S(t - t_known)) <= dM (1 - S(t - t_known)),
+ * S the step response of the order-3 binomial SVF, whose tail is
+ * e^-x (1 + x + x^2/2), x = wc t: below 1e-3 from x = 11.23 on. So from
+ * the step in which the known load changes, r2..r4 are not valid for
+ * load_hold_steps (the caller's figure for its link: the lag is already
+ * over when the change is seen, what remains is the filter's tail,
+ * ceil(11.23 / (wc T)) = 113 steps at wc 100 rad/s, T 1 ms); their load
+ * means (load_tau) are not updated meanwhile. The first sample after
+ * init/reset only records the load. Cost: one compare per step.
  *
  * Fault-symptom structure (theory; steady state, one fault at a time, small
  * deviations; "+"/"-" is the sign of the residual change for the fault in
@@ -338,6 +353,9 @@ typedef struct {
   int32_t ra_min_ohm_q24;   /* plausible range of R_A */
   int32_t ra_max_ohm_q24;
   uint32_t load_tau_s;      /* 0: M_L is the input; else r2..r4 follow their mean */
+  uint16_t load_hold_steps; /* 0: off; else r2..r4 are not valid for this many
+                             * steps after a change of the known load (see
+                             * "Late load") */
   /* Stated parameter uncertainties of the model in use (absolute, >= 0,
    * at most the parameter itself); they widen each band by
    * sum |dr/dp| dp on the current filtered signals (see Thresholds). */
@@ -374,6 +392,7 @@ typedef struct {
   uint32_t ra_updates;         /* accepted R_A blocks */
   uint32_t ra_blocks_rejected; /* low current, gate, or not valid */
   uint32_t ra_limit_hits;      /* R_A step hit the rate bound or the range */
+  uint32_t load_holds;         /* known-load changes that started a hold */
 } canfdi_parity_dcm_diag_t;
 
 /* Instance, caller-owned; read it through the functions below. */
@@ -399,6 +418,8 @@ typedef struct {
   uint16_t settle;
   uint16_t w_ok;
   uint16_t ra_learn_left;
+  uint16_t load_hold;         /* steps left of the late-load hold */
+  int32_t load_prev_q16;      /* known load of the last step */
   bool blk_invalid;
   bool primed;
   canfdi_parity_dcm_out_t out;

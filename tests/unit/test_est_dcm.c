@@ -378,6 +378,44 @@ START_TEST(test_cfg)
 }
 END_TEST
 
+/* Late load (canfdi_est_dcm_set_load_offset): a change of the known load
+ * offset skips the mechanical updates of the next load_hold_steps steps
+ * (one per decim steps), none before the change, none after the hold, none
+ * with the hold off. */
+START_TEST(test_late_load_hold)
+{
+  canfdi_est_dcm_cfg_t c;
+  unsigned k;
+  uint32_t n;
+  canfdi_est_dcm_default_cfg(&c);
+  c.load_hold_steps = 47U;
+  ck_assert_int_eq(canfdi_est_dcm_init(&rig.est, &c), CANFDI_OK);
+  for (k = 0U; k < 100U; k++) {
+    canfdi_est_dcm_set_load_offset(&rig.est, 0);
+    canfdi_est_dcm_step(&rig.est, q16(38.0), q16(4.0), q16(100.0));
+  }
+  ck_assert_uint_eq(canfdi_est_dcm_diag(&rig.est)->load_hold_skips, 0U);
+  for (k = 0U; k < 47U; k++) {
+    canfdi_est_dcm_set_load_offset(&rig.est, q16(0.4));
+    canfdi_est_dcm_step(&rig.est, q16(38.0), q16(4.0), q16(100.0));
+  }
+  n = canfdi_est_dcm_diag(&rig.est)->load_hold_skips;
+  CHECK((n >= 47U / c.decim) && (n <= (47U + c.decim - 1U) / c.decim));
+  for (k = 0U; k < 100U; k++) {
+    canfdi_est_dcm_set_load_offset(&rig.est, q16(0.4));
+    canfdi_est_dcm_step(&rig.est, q16(38.0), q16(4.0), q16(100.0));
+  }
+  ck_assert_uint_eq(canfdi_est_dcm_diag(&rig.est)->load_hold_skips, n);
+  c.load_hold_steps = 0U;
+  ck_assert_int_eq(canfdi_est_dcm_init(&rig.est, &c), CANFDI_OK);
+  for (k = 0U; k < 100U; k++) {
+    canfdi_est_dcm_set_load_offset(&rig.est, (k < 50U) ? 0 : q16(0.4));
+    canfdi_est_dcm_step(&rig.est, q16(38.0), q16(4.0), q16(100.0));
+  }
+  ck_assert_uint_eq(canfdi_est_dcm_diag(&rig.est)->load_hold_skips, 0U);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("est_dcm");
@@ -385,6 +423,7 @@ static Suite *make_suite(void)
 
   tc = tcase_create("config");
   tcase_add_test(tc, test_cfg);
+  tcase_add_test(tc, test_late_load_hold);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("acceptance");

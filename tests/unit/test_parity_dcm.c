@@ -621,6 +621,45 @@ START_TEST(reset_restarts_settling_keeps_ra)
 }
 END_TEST
 
+/* Late load (header): a change of the known load makes r2..r4 invalid for
+ * exactly load_hold_steps steps, from the step that carries the new value;
+ * r1 (no M_L) stays valid; 0 disables; the first sample only records the
+ * load (no hold at start-up). */
+START_TEST(late_load_holds_r2_r4)
+{
+  canfdi_parity_dcm_in_t in = {q16(38.0), q16(4.0), q16(100.0), q16(1.2)};
+  const canfdi_parity_dcm_out_t *o = NULL;
+  unsigned k;
+  canfdi_parity_dcm_default_cfg(&g_cfg);
+  g_cfg.ra_track = 0U;
+  g_cfg.load_hold_steps = 113U;
+  ck_assert_int_eq(canfdi_parity_dcm_init(&g_p, &g_cfg), CANFDI_OK);
+  for (k = 0U; k < 200U; k++) {
+    o = canfdi_parity_dcm_step(&g_p, &in);
+  }
+  ck_assert_uint_eq(o->valid, 0x0FU);
+  ck_assert_uint_eq(canfdi_parity_dcm_diag(&g_p)->load_holds, 0U);
+  in.load_Nm_q16 = q16(1.6);
+  for (k = 1U; k <= 113U; k++) {
+    o = canfdi_parity_dcm_step(&g_p, &in);
+    ck_assert_uint_eq(o->valid, 0x01U);
+  }
+  o = canfdi_parity_dcm_step(&g_p, &in);
+  ck_assert_uint_eq(o->valid, 0x0FU);
+  ck_assert_uint_eq(canfdi_parity_dcm_diag(&g_p)->load_holds, 1U);
+  /* off: the same change leaves validity alone */
+  g_cfg.load_hold_steps = 0U;
+  ck_assert_int_eq(canfdi_parity_dcm_init(&g_p, &g_cfg), CANFDI_OK);
+  for (k = 0U; k < 200U; k++) {
+    o = canfdi_parity_dcm_step(&g_p, &in);
+  }
+  in.load_Nm_q16 = q16(1.2);
+  o = canfdi_parity_dcm_step(&g_p, &in);
+  ck_assert_uint_eq(o->valid, 0x0FU);
+  init_default();
+}
+END_TEST
+
 START_TEST(extreme_inputs_saturate)
 {
   static const int32_t vals[] = {INT32_MIN, -1, 0, 1, INT32_MAX, -2000000000, 2000000000};
@@ -682,6 +721,7 @@ static Suite *make_suite(void)
 
   tc = tcase_create("robustness");
   tcase_add_test(tc, reset_restarts_settling_keeps_ra);
+  tcase_add_test(tc, late_load_holds_r2_r4);
   tcase_add_test(tc, extreme_inputs_saturate);
   suite_add_tcase(s, tc);
   return s;
