@@ -71,6 +71,7 @@ firmware-guard: $(TGT_ELFS)
 	@$(ARM_SIZE) $(TGT_ELFS)
 	@bash tests/target/fw_guard.sh --nm $(ARM_NM) --main $(TGT_MAIN) \
 	  --sources "$(TGT_FW_SRC)" --headers "$(TGT_FW_HDR)" \
+	  --kw-only "$(sort $(wildcard firmware/port/linux/*.[ch]))" \
 	  $(foreach c,$(TGT_CORES),$(c)=$(BUILD)/target/$(c)/canfdi.elf)
 
 # Proves the guard catches what it claims to (builds copies of the tree).

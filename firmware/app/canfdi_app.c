@@ -173,6 +173,8 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
       app->dcm_in_ok = false;
       app->thr_in_ok = false;
       app->now_us = now_us;
+      app->step_time_max_us = 0U;
+      app->cycle_time_max_us = 0U;
       app->diag = (canfdi_app_diag_t){0};
       app->initialised = true;
     }
@@ -194,6 +196,15 @@ void canfdi_app_deadline_miss(canfdi_app_t *app)
 {
   if (app != NULL) {
     app->diag.deadline_misses = sat_inc(app->diag.deadline_misses);
+  }
+}
+
+void canfdi_app_port_timing(canfdi_app_t *app, uint32_t step_us, uint32_t cycle_us)
+{
+  if (app != NULL) {
+    app->step_time_max_us = (step_us > app->step_time_max_us) ? step_us : app->step_time_max_us;
+    app->cycle_time_max_us =
+        (cycle_us > app->cycle_time_max_us) ? cycle_us : app->cycle_time_max_us;
   }
 }
 
@@ -652,6 +663,8 @@ static uint8_t com_fault(const canfdi_app_t *app)
   return id;
 }
 
+static void update_diag(canfdi_app_t *app);
+
 static int32_t step_outputs(canfdi_app_t *app, canfdi_tx_frame_t *out)
 {
   canfdi_tx_data_t d;
@@ -684,6 +697,11 @@ static int32_t step_outputs(canfdi_app_t *app, canfdi_tx_frame_t *out)
     d.status.thr_limp_home = app->mgr_out.thr_limp_home;
     d.status.active_dtc_count = canfdi_dtc_count_by_mask(&app->dtc, (uint8_t)CANFDI_DTC_ST_TF);
     d.status.deadline_misses = app->diag.deadline_misses;
+    /* the port's timing since the last EcuStatus; a new maximum starts */
+    d.status.step_time_max_us = app->step_time_max_us;
+    d.status.cycle_time_max_us = app->cycle_time_max_us;
+    app->step_time_max_us = 0U;
+    app->cycle_time_max_us = 0U;
   }
   if ((due & (1U << CANFDI_TX_F_DIAGNOSIS)) != 0U) {
     d.diagnosis.dcm_fault_id =
@@ -692,6 +710,14 @@ static int32_t step_outputs(canfdi_app_t *app, canfdi_tx_frame_t *out)
         canfdi_diagnosis_isolated(&app->diagnosis, CANFDI_COMPONENT_THROTTLE, &d.diagnosis.thr_confidence_pct);
     d.diagnosis.com_fault_id = com_fault(app);
     d.diagnosis.com_confidence_pct = (d.diagnosis.com_fault_id != 0U) ? 100U : 0U;
+  }
+  if ((due & (1U << CANFDI_TX_F_SELF_DIAG)) != 0U) {
+    update_diag(app); /* include the frames received since the last step */
+    d.self_diag.frames_rejected = app->diag.frames_rejected;
+    d.self_diag.frames_unknown = app->diag.frames_unknown;
+    d.self_diag.saturations = app->diag.saturations;
+    d.self_diag.estimator_resets = app->diag.estimator_resets;
+    d.self_diag.dtc_reports_rejected = app->diag.dtc_reports_rejected;
   }
   if ((due & (1U << CANFDI_TX_F_DTC)) != 0U) {
     fill_cyclic_dtc(app, &d.dtc);
@@ -730,6 +756,7 @@ static void update_diag(canfdi_app_t *app)
     rej = sat_add(rej, app->rx.diag.implausible[i]);
   }
   app->diag.frames_rejected = rej;
+  app->diag.frames_unknown = app->rx.diag.unknown_id;
   app->diag.saturations =
       sat_add(sat_add(canfdi_ctrl_dcm_diag(&app->ctrl_dcm)->u_limited,
                       canfdi_ctrl_thr_diag(&app->ctrl_thr)->u_limited),

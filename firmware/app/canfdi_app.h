@@ -26,7 +26,8 @@
  *                         freeze frame of the key signals
  *   9. fault tolerance    canfdi_actmgr (bridges, limp-home, degradation)
  *  10. outputs            canfdi_tx: actuators every step, residuals 10 ms,
- *                         status / diagnosis / DTC / parameters 100 ms, DTC
+ *                         status / diagnosis / self-diagnostics / DTC /
+ *                         parameters 100 ms, DTC
  *                         status changes on change
  * The models use the command applied in the previous step (the voltage the
  * bridge held over the interval that ends with this sample).
@@ -131,6 +132,7 @@ typedef struct {
   uint32_t saturations;       /* controller outputs limited + tx values limited */
   uint32_t estimator_resets;  /* est_dcm + est_thr + parity resets */
   uint32_t frames_rejected;   /* length, CRC, counter, implausible (rx) */
+  uint32_t frames_unknown;    /* identifiers the rx does not supervise */
   uint32_t frames_sent;
   uint32_t dtc_reports_rejected;
 } canfdi_app_diag_t;
@@ -165,6 +167,8 @@ typedef struct {
   bool dcm_in_ok;                /* U_A, I_A, omega VALID this step */
   bool thr_in_ok;                /* TPS1/2, current, supply usable this step */
   uint32_t now_us;
+  uint32_t step_time_max_us;  /* port timing since the last EcuStatus (0 in SIL) */
+  uint32_t cycle_time_max_us;
   canfdi_app_diag_t diag;
   bool initialised;
 } canfdi_app_t;
@@ -193,6 +197,18 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
 
 /* The port reports a missed 1 ms deadline. */
 void canfdi_app_deadline_miss(canfdi_app_t *app);
+
+/*
+ * The port reports the timing of the step it just ran: step_us, the
+ * execution time of canfdi_app_step (and the sending of its frames, as the
+ * port measures it), and cycle_us, the time between the starts of this step
+ * and the previous one. The app keeps the maximum of each and sends it in
+ * the next EcuStatus (StsStepTimeMax, StsCycleTimeMax, saturating at 4095
+ * us), then starts a new maximum. A port that never calls this (SIL,
+ * lockstep) sends 0 for both, so its frames do not depend on the host's
+ * speed. No-op on NULL. Cost O(1).
+ */
+void canfdi_app_port_timing(canfdi_app_t *app, uint32_t step_us, uint32_t cycle_us);
 
 /* The trouble-code memory (read access, NVM load/store by the port). */
 canfdi_dtc_t *canfdi_app_dtc(canfdi_app_t *app);

@@ -29,8 +29,8 @@ typedef struct {
   uint8_t phase;  /* first due step after init (the actuators: 0) */
 } slot_t;
 
-/* Phases: the 10 ms frames at 2 and 7, the 100 ms frames at 3, 23, 43, 63,
- * 83 (all = 3 mod 10): no two slow frames share a step, which bounds a step
+/* Phases: the 10 ms frames at 2 and 7, the 100 ms frames at 3, 13, 23, 43,
+ * 63, 83 (all = 3 mod 10): no two slow frames share a step, which bounds a step
  * to two actuators + one slow frame + one DTC event. */
 static const slot_t slots[CANFDI_TX_F_COUNT] = {
     {(uint8_t)PERIOD_STEPS(CANFDI_MSG_DCM_ACTUATOR_CYCLE_TIME_MS), 0U},
@@ -39,6 +39,7 @@ static const slot_t slots[CANFDI_TX_F_COUNT] = {
     {(uint8_t)PERIOD_STEPS(CANFDI_MSG_ECU_RESIDUAL_THR_CYCLE_TIME_MS), 7U},
     {(uint8_t)PERIOD_STEPS(CANFDI_MSG_ECU_STATUS_CYCLE_TIME_MS), 3U},
     {(uint8_t)PERIOD_STEPS(CANFDI_MSG_ECU_DIAGNOSIS_CYCLE_TIME_MS), 23U},
+    {(uint8_t)PERIOD_STEPS(CANFDI_MSG_ECU_SELF_DIAG_CYCLE_TIME_MS), 13U},
     {(uint8_t)PERIOD_STEPS(CANFDI_MSG_ECU_DTC_CYCLE_TIME_MS), 43U},
     {(uint8_t)PERIOD_STEPS(CANFDI_MSG_ECU_PARAM_DCM_CYCLE_TIME_MS), 63U},
     {(uint8_t)PERIOD_STEPS(CANFDI_MSG_ECU_PARAM_THR_CYCLE_TIME_MS), 83U},
@@ -351,6 +352,30 @@ int canfdi_tx_encode_diagnosis(canfdi_tx_t *tx, const canfdi_tx_diagnosis_t *v,
   return ret;
 }
 
+int canfdi_tx_encode_self_diag(canfdi_tx_t *tx, const canfdi_tx_self_diag_t *v,
+                               canfdi_tx_frame_t *out)
+{
+  int ret = -CANFDI_EINVAL;
+  if (args_ok(tx, v, out)) {
+    struct canfdi_msg_ecu_self_diag_t m;
+    m.sdg_frames_rejected = (uint16_t)sat_u(tx, v->frames_rejected,
+                                            CANFDI_RAW_ECU_SELF_DIAG_SDG_FRAMES_REJECTED_MAX);
+    m.sdg_frames_unknown = (uint16_t)sat_u(tx, v->frames_unknown,
+                                           CANFDI_RAW_ECU_SELF_DIAG_SDG_FRAMES_UNKNOWN_MAX);
+    m.sdg_saturations =
+        (uint16_t)sat_u(tx, v->saturations, CANFDI_RAW_ECU_SELF_DIAG_SDG_SATURATIONS_MAX);
+    m.sdg_estimator_resets = (uint8_t)sat_u(tx, v->estimator_resets,
+                                            CANFDI_RAW_ECU_SELF_DIAG_SDG_ESTIMATOR_RESETS_MAX);
+    m.sdg_dtc_reports_rejected = (uint8_t)sat_u(
+        tx, v->dtc_reports_rejected, CANFDI_RAW_ECU_SELF_DIAG_SDG_DTC_REPORTS_REJECTED_MAX);
+    frame_head(out, CANFDI_MSG_ECU_SELF_DIAG_FRAME_ID,
+               canfdi_msg_ecu_self_diag_pack(out->data, &m, 8U));
+    count(&tx->diag.frames[CANFDI_TX_F_SELF_DIAG]);
+    ret = CANFDI_OK;
+  }
+  return ret;
+}
+
 int canfdi_tx_encode_dtc(canfdi_tx_t *tx, const canfdi_tx_dtc_t *v, bool change,
                          canfdi_tx_frame_t *out)
 {
@@ -464,6 +489,9 @@ int canfdi_tx_step(canfdi_tx_t *tx, const canfdi_tx_data_t *data, canfdi_tx_fram
     }
     if ((due & (UINT32_C(1) << CANFDI_TX_F_DIAGNOSIS)) != 0U) {
       failed += (canfdi_tx_encode_diagnosis(tx, &data->diagnosis, &out[n++]) != CANFDI_OK) ? 1U : 0U;
+    }
+    if ((due & (UINT32_C(1) << CANFDI_TX_F_SELF_DIAG)) != 0U) {
+      failed += (canfdi_tx_encode_self_diag(tx, &data->self_diag, &out[n++]) != CANFDI_OK) ? 1U : 0U;
     }
     if ((due & (UINT32_C(1) << CANFDI_TX_F_DTC)) != 0U) {
       failed += (canfdi_tx_encode_dtc(tx, &data->dtc, false, &out[n++]) != CANFDI_OK) ? 1U : 0U;

@@ -10,6 +10,7 @@
  *   EcuResidualThr  0x201  10 ms   7      corr, tps1, tps2, current residuals
  *   EcuStatus       0x300  100 ms  3      degradation, bridge, limp-home, counts
  *   EcuDiagnosis    0x301  100 ms  23     isolated fault ids and confidences
+ *   EcuSelfDiag     0x302  100 ms  13     the supervisor's monotone counters
  *   EcuDtc          0x310  100 ms  43     one stored DTC per frame, round robin
  *                   + on change: queued by canfdi_tx_dtc_event, one per step
  *   EcuParamDcm     0x320  100 ms  63     RLS estimates of the DC motor
@@ -17,8 +18,9 @@
  * Periods come from the DBC (CANFDI_MSG_*_CYCLE_TIME_MS, in steps of
  * CANFDI_CFG_STEP_US); the phases (in steps, fixed) spread the slow frames
  * so that no step sends more than CANFDI_TX_MAX_FRAMES_PER_STEP frames:
- * the two actuator frames, at most one 10 ms or 100 ms frame (the phases
- * never coincide modulo 10) and at most one on-change DTC frame. The first
+ * the two actuator frames, at most one 10 ms or 100 ms frame (the 100 ms
+ * phases are distinct and all 3 mod 10, the 10 ms ones 2 and 7 mod 10, so
+ * none coincide) and at most one on-change DTC frame. The first
  * step after init sends the actuators only; each slow frame first goes out
  * at the step equal to its phase. Scheduling uses per-frame countdowns, so
  * it never drifts or wraps.
@@ -28,8 +30,8 @@
  * counter +1 per frame, CRC-8 over data id and bytes 1..7). Values are
  * converted with the integer constants of comm/gen/canfdi_sig_conv.h and
  * saturated to the DBC's [min|max] (raw limits of canfdi_raw_limits.h);
- * integers (counts, times, confidences, DTC) saturate at their field's
- * maximum; an enumeration out of its table saturates to its top value,
+ * integers (counts, times, confidences, DTC, the EcuSelfDiag counters)
+ * saturate at their field's maximum; an enumeration out of its table saturates to its top value,
  * except the actuator bridge: an unknown bridge selection is sent as
  * bridge none with the drive disabled (the safe state). Every limited
  * value is counted in diag.saturations (or diag.invalid_enums).
@@ -63,7 +65,7 @@
  *   with a 10/100 ms frame and/or event    701 / 856 / 1078   1116 / 1426 / 1856
  * Per actuator frame about 300 (M4) / 450 (M0+): one 64-bit conversion
  * (__aeabi_lmul on M0+), the generated pack and the E2E CRC over 9 bytes.
- * Memory: sizeof(canfdi_tx_t) = 148 bytes on a 32-bit target with the
+ * Memory: sizeof(canfdi_tx_t) = 156 bytes on a 32-bit target with the
  * default 8-entry DTC event queue (8 bytes per entry); the caller's frame
  * buffer 4 x 16 bytes; code 2.7 kB (-Os); stack <= 48 bytes per encoder
  * plus the generated pack and the E2E protect (-fstack-usage). No heap, no
@@ -88,11 +90,12 @@ typedef enum {
   CANFDI_TX_F_RES_THR = 3,    /* 0x201 EcuResidualThr */
   CANFDI_TX_F_STATUS = 4,     /* 0x300 EcuStatus */
   CANFDI_TX_F_DIAGNOSIS = 5,  /* 0x301 EcuDiagnosis */
-  CANFDI_TX_F_DTC = 6,        /* 0x310 EcuDtc, cyclic (round robin) */
-  CANFDI_TX_F_PRM_DCM = 7,    /* 0x320 EcuParamDcm */
-  CANFDI_TX_F_PRM_THR = 8,    /* 0x321 EcuParamThr */
-  CANFDI_TX_F_COUNT = 9,
-  CANFDI_TX_F_DTC_EVENT = 9   /* due bit only: an on-change EcuDtc is queued */
+  CANFDI_TX_F_SELF_DIAG = 6,  /* 0x302 EcuSelfDiag */
+  CANFDI_TX_F_DTC = 7,        /* 0x310 EcuDtc, cyclic (round robin) */
+  CANFDI_TX_F_PRM_DCM = 8,    /* 0x320 EcuParamDcm */
+  CANFDI_TX_F_PRM_THR = 9,    /* 0x321 EcuParamThr */
+  CANFDI_TX_F_COUNT = 10,
+  CANFDI_TX_F_DTC_EVENT = 10  /* due bit only: an on-change EcuDtc is queued */
 } canfdi_tx_frame_id_t;
 
 #define CANFDI_TX_MAX_FRAMES_PER_STEP 4U
@@ -152,6 +155,17 @@ typedef struct {
   uint8_t com_confidence_pct;
 } canfdi_tx_diagnosis_t;
 
+/* EcuSelfDiag: monotone counters of the supervisor (canfdi_app_diag_t);
+ * each saturates at its field's maximum (65535 for the first three, 255
+ * for the last two), where it then stays. */
+typedef struct {
+  uint32_t frames_rejected;      /* rx: length, CRC, counter, implausible */
+  uint32_t frames_unknown;       /* rx: identifiers not supervised */
+  uint32_t saturations;          /* controller outputs + tx values limited */
+  uint32_t estimator_resets;     /* estimators + parity equations */
+  uint32_t dtc_reports_rejected; /* reports the DTC memory refused */
+} canfdi_tx_self_diag_t;
+
 /* EcuDtc: one stored trouble code. */
 typedef struct {
   uint32_t dtc;       /* ISO 14229-1 3-byte DTC (CANFDI_DTC_*); saturates at 0xFFFFFF */
@@ -189,6 +203,7 @@ typedef struct {
   canfdi_tx_res_thr_t res_thr;
   canfdi_tx_status_t status;
   canfdi_tx_diagnosis_t diagnosis;
+  canfdi_tx_self_diag_t self_diag;
   canfdi_tx_dtc_t dtc; /* the cyclic round-robin record */
   canfdi_tx_param_dcm_t prm_dcm;
   canfdi_tx_param_thr_t prm_thr;
@@ -257,6 +272,8 @@ int canfdi_tx_encode_res_dcm(canfdi_tx_t *tx, const canfdi_tx_res_dcm_t *v, canf
 int canfdi_tx_encode_res_thr(canfdi_tx_t *tx, const canfdi_tx_res_thr_t *v, canfdi_tx_frame_t *out);
 int canfdi_tx_encode_status(canfdi_tx_t *tx, const canfdi_tx_status_t *v, canfdi_tx_frame_t *out);
 int canfdi_tx_encode_diagnosis(canfdi_tx_t *tx, const canfdi_tx_diagnosis_t *v,
+                               canfdi_tx_frame_t *out);
+int canfdi_tx_encode_self_diag(canfdi_tx_t *tx, const canfdi_tx_self_diag_t *v,
                                canfdi_tx_frame_t *out);
 int canfdi_tx_encode_dtc(canfdi_tx_t *tx, const canfdi_tx_dtc_t *v, bool change,
                          canfdi_tx_frame_t *out);

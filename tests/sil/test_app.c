@@ -120,6 +120,139 @@ START_TEST(test_self_diagnostics)
 }
 END_TEST
 
+/* Little-endian unsigned field of an 8-byte frame (the DBC's @1+). */
+static uint32_t field_le(const canfdi_tx_frame_t *f, unsigned start, unsigned len)
+{
+  uint64_t v = 0U;
+  for (unsigned i = 0U; i < 8U; i++) {
+    v |= (uint64_t)f->data[i] << (8U * i);
+  }
+  return (uint32_t)((v >> start) & ((UINT64_C(1) << len) - 1U));
+}
+
+/* EcuSelfDiag goes out every 100 ms (first at step 13 after init) with the
+ * supervisor's counters, counting frames up to the step that sends it: one
+ * DcmSensor with a wrong length raises SdgFramesRejected by exactly 1, one
+ * unknown identifier SdgFramesUnknown by exactly 1. */
+START_TEST(test_self_diag_frame)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint8_t d[8];
+  uint32_t k;
+  uint32_t n_sdg = 0U;
+  uint32_t last_k = 0U;
+  uint32_t rej[10];
+  uint32_t unk[10];
+  memset(d, 0, sizeof d);
+  canfdi_app_default_cal(&cal);
+  ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+  for (k = 1U; k <= 1000U; k++) {
+    int32_t n;
+    if (k == 114U) { /* just before the second EcuSelfDiag */
+      ck_assert_int_eq(canfdi_app_rx_frame(&app, 0x010U, d, 7U, k * 1000U), CANFDI_RX_BAD_LENGTH);
+      ck_assert_int_eq(canfdi_app_rx_frame(&app, 0x7FFU, d, 8U, k * 1000U), CANFDI_RX_UNKNOWN_ID);
+    }
+    if (k == 514U) { /* two unknown ids (one a flagged/extended value) */
+      ck_assert_int_eq(canfdi_app_rx_frame(&app, 0x123U, d, 8U, k * 1000U), CANFDI_RX_UNKNOWN_ID);
+      ck_assert_int_eq(canfdi_app_rx_frame(&app, 0x80000010U, d, 8U, k * 1000U),
+                       CANFDI_RX_UNKNOWN_ID);
+    }
+    n = canfdi_app_step(&app, k * 1000U, out);
+    ck_assert_int_le(n, (int32_t)CANFDI_APP_MAX_TX);
+    for (int32_t i = 0; i < n; i++) {
+      if (out[i].id == 0x302U) {
+        ck_assert_uint_eq(out[i].dlc, 8U);
+        ck_assert_uint_eq(k % 100U, 14U);
+        ck_assert(n_sdg < 10U);
+        if (n_sdg > 0U) {
+          ck_assert_uint_eq(k - last_k, 100U);
+        }
+        rej[n_sdg] = field_le(&out[i], 0U, 16U);
+        unk[n_sdg] = field_le(&out[i], 16U, 16U);
+        ck_assert_uint_eq(field_le(&out[i], 48U, 8U), canfdi_app_diag(&app)->estimator_resets);
+        ck_assert_uint_eq(field_le(&out[i], 56U, 8U),
+                          canfdi_app_diag(&app)->dtc_reports_rejected);
+        last_k = k;
+        n_sdg++;
+      }
+    }
+  }
+  ck_assert_uint_eq(n_sdg, 10U);
+  ck_assert_uint_eq(rej[0], 0U);
+  ck_assert_uint_eq(unk[0], 0U);
+  ck_assert_uint_eq(rej[1], rej[0] + 1U);
+  ck_assert_uint_eq(unk[1], unk[0] + 1U);
+  ck_assert_uint_eq(rej[5], rej[1]);
+  ck_assert_uint_eq(unk[5], unk[4] + 2U);
+  ck_assert_uint_eq(unk[9], 3U);
+  ck_assert_uint_eq(canfdi_app_diag(&app)->frames_unknown, 3U);
+}
+END_TEST
+
+/* The counters saturate at their field's maximum (and count it). */
+START_TEST(test_self_diag_saturates)
+{
+  static canfdi_tx_t tx;
+  const canfdi_tx_self_diag_t v = {70000U, UINT32_MAX, 65535U, 256U, 1000U};
+  canfdi_tx_frame_t f;
+  ck_assert_int_eq(canfdi_tx_init(&tx), CANFDI_OK);
+  ck_assert_int_eq(canfdi_tx_encode_self_diag(&tx, &v, &f), CANFDI_OK);
+  ck_assert_uint_eq(f.id, 0x302U);
+  ck_assert_uint_eq(field_le(&f, 0U, 16U), 65535U);
+  ck_assert_uint_eq(field_le(&f, 16U, 16U), 65535U);
+  ck_assert_uint_eq(field_le(&f, 32U, 16U), 65535U);
+  ck_assert_uint_eq(field_le(&f, 48U, 8U), 255U);
+  ck_assert_uint_eq(field_le(&f, 56U, 8U), 255U);
+  ck_assert_uint_eq(tx.diag.saturations, 4U);
+  ck_assert_int_eq(canfdi_tx_encode_self_diag(&tx, NULL, &f), -CANFDI_EINVAL);
+}
+END_TEST
+
+/* Port timing: the maximum since the last EcuStatus goes out in the next
+ * one (StsStepTimeMax bits 32..43, StsCycleTimeMax 44..55), then a new
+ * maximum starts; never reported (SIL, lockstep): 0. */
+START_TEST(test_port_timing)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t k;
+  uint32_t n_sts = 0U;
+  canfdi_app_default_cal(&cal);
+  ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+  canfdi_app_port_timing(NULL, 1U, 1U);
+  for (k = 1U; k <= 304U; k++) {
+    const int32_t n = canfdi_app_step(&app, k * 1000U, out);
+    for (int32_t i = 0; i < n; i++) {
+      if (out[i].id == 0x300U) {
+        const uint32_t step = field_le(&out[i], 32U, 12U);
+        const uint32_t cycle = field_le(&out[i], 44U, 12U);
+        ck_assert_uint_eq(k % 100U, 4U);
+        if (k == 104U) {
+          ck_assert_uint_eq(step, 250U);
+          ck_assert_uint_eq(cycle, 1500U);
+        } else if (k == 304U) {
+          ck_assert_uint_eq(step, 4095U); /* saturated */
+          ck_assert_uint_eq(cycle, 1000U);
+        } else {
+          ck_assert_uint_eq(step, 0U);
+          ck_assert_uint_eq(cycle, 0U);
+        }
+        n_sts++;
+      }
+    }
+    if (k == 50U) {
+      canfdi_app_port_timing(&app, 250U, 1000U);
+    } else if (k == 60U) {
+      canfdi_app_port_timing(&app, 120U, 1500U);
+    } else if (k == 250U) {
+      canfdi_app_port_timing(&app, 9000U, 1000U);
+    } else {
+      /* not reported */
+    }
+  }
+  ck_assert_uint_eq(n_sts, 4U);
+}
+END_TEST
+
 /* SetpointDcm with raw speed and load (DBC: both signed 16 bit, little
  * endian, bits 0..15 and 16..31). */
 static void send_sp_dcm(int16_t speed_raw, int16_t load_raw, uint32_t now_us)
@@ -189,6 +322,9 @@ static Suite *make_suite(void)
   tc = tcase_create("supervision");
   tcase_add_test(tc, test_no_sensor_frames);
   tcase_add_test(tc, test_self_diagnostics);
+  tcase_add_test(tc, test_self_diag_frame);
+  tcase_add_test(tc, test_self_diag_saturates);
+  tcase_add_test(tc, test_port_timing);
   tcase_add_test(tc, test_load_feed_forward);
   suite_add_tcase(s, tc);
   return s;

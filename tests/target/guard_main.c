@@ -713,6 +713,7 @@ static void guard_tx(void)
   data.prm_dcm.j_q16 = in_s32[0];
   data.status.deadline_misses = in_u32;
   data.dtc.dtc = in_u32;
+  data.self_diag.frames_rejected = in_u32;
   sink32(canfdi_tx_init(&tx));
   sinku64(canfdi_tx_due(&tx));
   sink32(canfdi_tx_dtc_event(&tx, &data.dtc));
@@ -723,6 +724,7 @@ static void guard_tx(void)
   sink32(canfdi_tx_encode_res_thr(&tx, &data.res_thr, &fr));
   sink32(canfdi_tx_encode_status(&tx, &data.status, &fr));
   sink32(canfdi_tx_encode_diagnosis(&tx, &data.diagnosis, &fr));
+  sink32(canfdi_tx_encode_self_diag(&tx, &data.self_diag, &fr));
   sink32(canfdi_tx_encode_dtc(&tx, &data.dtc, (in_n & 1U) != 0U, &fr));
   sink32(canfdi_tx_encode_prm_dcm(&tx, &data.prm_dcm, &fr));
   sink32(canfdi_tx_encode_prm_thr(&tx, &data.prm_thr, &fr));
@@ -747,6 +749,7 @@ static void guard_app(void)
   sink32(canfdi_app_rx_frame(&app, in_u32, frame, (uint8_t)in_n, in_u32));
   sink32(canfdi_app_step(&app, in_u32, out));
   canfdi_app_deadline_miss(&app);
+  canfdi_app_port_timing(&app, in_u32, in_u32 + 1U);
   sinku64((uint64_t)canfdi_app_dtc(&app)->changes);
   d = canfdi_app_diag(&app);
   sinku64((uint64_t)d->steps + d->deadline_misses + out[0].data[0]);

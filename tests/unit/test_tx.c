@@ -481,8 +481,9 @@ END_TEST
 START_TEST(schedule_follows_the_dbc_cycle_times)
 {
   static const uint32_t ids[CANFDI_TX_F_COUNT] = {0x20U,  0x21U,  0x200U, 0x201U, 0x300U,
-                                                  0x301U, 0x310U, 0x320U, 0x321U};
-  static const unsigned phase[CANFDI_TX_F_COUNT] = {0U, 0U, 2U, 7U, 3U, 23U, 43U, 63U, 83U};
+                                                  0x301U, 0x302U, 0x310U, 0x320U, 0x321U};
+  static const unsigned phase[CANFDI_TX_F_COUNT] = {0U,  0U,  2U,  7U,  3U,
+                                                    23U, 13U, 43U, 63U, 83U};
   unsigned count[CANFDI_TX_F_COUNT] = {0};
   unsigned events = 0U;
   unsigned most = 0U;
