@@ -156,6 +156,22 @@ int canfdi_sim_add_fault(canfdi_sim_t *sim, const canfdi_sim_fault_spec_t *spec)
   return rc;
 }
 
+size_t canfdi_sim_clear_faults(canfdi_sim_t *sim, uint8_t id)
+{
+  size_t kept = 0U;
+  size_t i;
+  CANFDI_ASSERT(sim != NULL);
+  for (i = 0U; i < sim->n_faults; i++) {
+    if ((id != 0U) && (sim->faults[i].id != id)) {
+      sim->faults[kept] = sim->faults[i];
+      kept++;
+    }
+  }
+  i = sim->n_faults - kept;
+  sim->n_faults = kept;
+  return i;
+}
+
 void canfdi_sim_step(canfdi_sim_t *sim, const canfdi_sim_in_t *in)
 {
   canfdi_sim_fx_t fx_now;

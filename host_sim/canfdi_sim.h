@@ -108,6 +108,11 @@ void canfdi_sim_resample(canfdi_sim_t *sim);
 /* Adds a fault (a validated spec). -CANFDI_ERANGE when full. */
 int canfdi_sim_add_fault(canfdi_sim_t *sim, const canfdi_sim_fault_spec_t *spec);
 
+/* Removes every fault with catalogue id `id` (0: every fault), keeping the
+ * order of the others; returns how many were removed. The effects in
+ * sim->fx change at the next step or resample. Cannot fail by contract. */
+size_t canfdi_sim_clear_faults(canfdi_sim_t *sim, uint8_t id);
+
 /* One 1 ms step (see above). Cannot fail by contract. */
 void canfdi_sim_step(canfdi_sim_t *sim, const canfdi_sim_in_t *in);
 

@@ -26,7 +26,8 @@ SIL_OBJ := $(BUILD)/host/$(SIL_SRC:.c=.o)
 SIL_BIN := $(BUILD)/bin/canfdi-sil
 # host_sim.mk is read after mk/*.mk, so its SIM_LIB_OBJ is not known yet
 # where a prerequisite list is expanded: the same list, formed here.
-SIL_SIM_OBJ := $(patsubst %.c,$(BUILD)/host/%.o,$(filter-out host_sim/canfdi_sim_main.c,\
+# (The CLI's main and its SocketCAN I/O are not part of the library.)
+SIL_SIM_OBJ := $(patsubst %.c,$(BUILD)/host/%.o,$(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,\
                  $(sort $(wildcard host_sim/*.c))) $(sort $(wildcard host_sim/gen/*.c)))
 SIL_SCN := $(sort $(filter-out tests/sil/scenarios/demo.scn,$(wildcard tests/sil/scenarios/*.scn)))
 SIL_PENDING := $(sort $(wildcard tests/sil/pending/*.scn))
@@ -73,7 +74,7 @@ TEST_STEPS += sil-test
 # release firmware objects (-O2, no sanitizers: valgrind cannot run ASan
 # binaries), run under callgrind with collection only inside the step.
 SIL_REL_BIN := $(BUILD)/bench/canfdi-sil-rel
-$(SIL_REL_BIN): $(SIL_SRC) $(SIL_GEN_C) $(FW_SRC) $(filter-out host_sim/canfdi_sim_main.c,$(wildcard host_sim/*.c)) $(wildcard host_sim/gen/*.c)
+$(SIL_REL_BIN): $(SIL_SRC) $(SIL_GEN_C) $(FW_SRC) $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,$(wildcard host_sim/*.c)) $(wildcard host_sim/gen/*.c)
 	@mkdir -p $(@D)
 	$(CC) $(WARN_C) -O2 -g -D_POSIX_C_SOURCE=200809L -Ifirmware -I$(BUILD)/gen -Ihost_sim -I$(SIL_GEN_DIR) -o $@ $(filter %.c,$^) -lm
 

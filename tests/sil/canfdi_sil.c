@@ -7,11 +7,15 @@
  *   t_k: scenario setpoints -> SetpointDcm/SetpointThr frames (every 10 ms)
  *        plant sample       -> DcmSensor/ThrSensor (E2E, comm faults) and
  *                              SimPlantStatus frames (host_sim frame builder)
- *        all frames         -> canfdi_app_rx_frame; canfdi_app_step
- *        ECU frames         -> decoded with the tester codec: actuator
- *                              commands go to the plant, EcuStatus/EcuDtc
- *                              feed the timeline and the expectations
+ *        frames the ECU's   -> canfdi_app_rx_frame; canfdi_app_step
+ *        kernel filter passes  (setpoints and sensor frames, as on SocketCAN)
+ *        ECU frames         -> actuator commands go to the plant; decoded
+ *                              with the tester codec, EcuStatus/EcuDtc feed
+ *                              the timeline and the expectations
  *        plant steps to t_k+1 with the commands held.
+ * The plant/vehicle side of the step is host_sim's canfdi_sim_rig.h, the
+ * same code canfdi-sim runs on SocketCAN (HIL), so SIL and HIL lockstep
+ * differ only in the transport.
  *
  * Reads the scenario format of host_sim/SCENARIO.md and evaluates its
  * `expect` lines; prints a technician's timeline and one PASS/FAIL line per
@@ -36,6 +40,7 @@
 #include "canfdi_sil_msg.h"
 #include "canfdi_sim.h"
 #include "canfdi_sim_frames.h"
+#include "canfdi_sim_rig.h"
 #include "canfdi_sim_scenario.h"
 #include "canfdi_sim_trace.h"
 #include "core/canfdi_common.h"
@@ -209,6 +214,15 @@ typedef struct {
 static canfdi_app_t app;  /* the firmware's whole state, as on a target */
 static canfdi_sim_scn_t scn;
 static canfdi_sim_t sim;
+static canfdi_sim_rig_t rig; /* the plant/vehicle side of a step (shared with HIL) */
+
+/* What the ECU's SocketCAN filter passes to the application (HIL contract):
+ * the setpoints and the sensor frames, not SimPlantStatus. */
+static bool ecu_filter_passes(uint32_t id)
+{
+  return (id == CANFDI_SIL_MSG_DCM_SENSOR_FRAME_ID) || (id == CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID) ||
+         (id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) || (id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID);
+}
 
 int main(int argc, char **argv)
 {
@@ -227,8 +241,8 @@ int main(int argc, char **argv)
   unsigned long long seed = 0ULL;
   canfdi_sim_scn_err_t err;
   canfdi_app_cal_t cal;
-  canfdi_sim_frames_t frames;
-  canfdi_sim_in_t in;
+  const canfdi_sim_in_t *in = &rig.in;
+  const canfdi_sim_trace_sp_t *sp = &rig.sp;
   ecu_view_t ecu;
   FILE *out = NULL;
   FILE *log = NULL;
@@ -348,9 +362,7 @@ int main(int argc, char **argv)
     expect_msg[i][0] = '\0';
   }
   memset(&ecu, 0, sizeof ecu);
-  memset(&in, 0, sizeof in);
-  in.dcm.bridge = CANFDI_ACTMGR_BRIDGE_A;
-  canfdi_sim_frames_init(&frames, (uint8_t)CANFDI_SIM_MODE_LOCKSTEP);
+  (void)canfdi_sim_rig_init(&rig, &scn, &sim, (uint8_t)CANFDI_SIM_MODE_LOCKSTEP);
   n_steps = (uint64_t)llround(scn.duration_s * 1000.0);
   if (!quiet) {
     printf("canfdi-sil: %s, %.3f s, seed %llu, %zu fault(s)\n", scn_path, scn.duration_s,
@@ -365,36 +377,17 @@ int main(int argc, char **argv)
   for (k = 0U; k < n_steps; k++) {
     const int64_t t_us = canfdi_sim_time_us(&sim);
     const uint32_t now_us = (uint32_t)t_us;
-    canfdi_sim_trace_sp_t sp;
-    canfdi_sim_frame_t pf[CANFDI_SIM_FRAMES_MAX_PER_STEP];
+    canfdi_sim_frame_t pf[CANFDI_SIM_RIG_MAX_TX];
     canfdi_tx_frame_t ef[CANFDI_APP_MAX_TX];
     size_t npf;
     int32_t nef;
     size_t j;
-    canfdi_sim_scn_eval(&scn, t_us, &sp.speed_rad_s, &sp.angle_deg, &sp.load_Nm);
-    /* the vehicle's setpoints, every 10 ms */
-    if ((k % 10U) == 0U) {
-      uint8_t d[8];
-      struct canfdi_sil_msg_setpoint_dcm_t spd;
-      struct canfdi_sil_msg_setpoint_thr_t spt;
-      memset(d, 0, sizeof d);
-      spd.sp_dcm_speed = canfdi_sil_msg_setpoint_dcm_sp_dcm_speed_encode(sp.speed_rad_s);
-      /* The vehicle knows the load it applies (the scenario's load profile;
-       * a `load fan` share is not sent: it stays unknown to the ECU). */
-      spd.sp_dcm_load = canfdi_sil_msg_setpoint_dcm_sp_dcm_load_encode(sp.load_Nm);
-      (void)canfdi_sil_msg_setpoint_dcm_pack(d, &spd, sizeof d);
-      (void)canfdi_app_rx_frame(&app, CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID, d, 8U, now_us);
-      log_frame(log, channel, t_us, CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID, d, 8U);
-      memset(d, 0, sizeof d);
-      spt.sp_thr_angle = canfdi_sil_msg_setpoint_thr_sp_thr_angle_encode(sp.angle_deg);
-      (void)canfdi_sil_msg_setpoint_thr_pack(d, &spt, sizeof d);
-      (void)canfdi_app_rx_frame(&app, CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID, d, 8U, now_us);
-      log_frame(log, channel, t_us, CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID, d, 8U);
-    }
-    /* the plant's sensor frames of this sample */
-    npf = canfdi_sim_frames_build(&frames, &sim, &in, pf);
+    /* the vehicle's setpoints (every 10 ms) and the plant's frames */
+    npf = canfdi_sim_rig_begin(&rig, pf);
     for (j = 0U; j < npf; j++) {
-      (void)canfdi_app_rx_frame(&app, pf[j].id, pf[j].data, pf[j].dlc, now_us);
+      if (ecu_filter_passes(pf[j].id)) {
+        (void)canfdi_app_rx_frame(&app, pf[j].id, pf[j].data, pf[j].dlc, now_us);
+      }
       log_frame(log, channel, t_us, pf[j].id, pf[j].data, pf[j].dlc);
     }
     /* the ECU's step */
@@ -413,31 +406,27 @@ int main(int argc, char **argv)
     }
     for (j = 0U; (nef > 0) && (j < (size_t)nef); j++) {
       const canfdi_tx_frame_t *f = &ef[j];
+      canfdi_sim_frame_t rf;
+      int rx;
       log_frame(log, channel, t_us, f->id, f->data, f->dlc);
-      if (f->id == CANFDI_SIL_MSG_DCM_ACTUATOR_FRAME_ID) {
-        struct canfdi_sil_msg_dcm_actuator_t a;
-        if (canfdi_sil_msg_dcm_actuator_unpack(&a, f->data, f->dlc) == 0) {
-          in.dcm.u_cmd_V = canfdi_sil_msg_dcm_actuator_dcm_ua_cmd_decode(a.dcm_ua_cmd);
-          in.dcm.bridge = a.dcm_bridge_sel;
-          in.dcm.enable = (a.dcm_enable != 0U);
-          if (!quiet && (a.dcm_bridge_sel != last_bridge)) {
-            printf("  %8.3f  dcm: power stage %s -> %s\n", (double)t_us * 1e-6,
-                   (last_bridge == 1U) ? "A" : ((last_bridge == 2U) ? "B" : "none"),
-                   (a.dcm_bridge_sel == 1U) ? "A" : ((a.dcm_bridge_sel == 2U) ? "B" : "none (drive off)"));
-          }
-          last_bridge = a.dcm_bridge_sel;
+      /* to the plant: what canfdi-sim's SocketCAN filter would pass */
+      rf.id = f->id;
+      rf.dlc = f->dlc;
+      memcpy(rf.data, f->data, sizeof rf.data);
+      rx = canfdi_sim_rig_rx(&rig, &rf, NULL);
+      if (rx == CANFDI_SIM_RIG_RX_ACT_DCM) {
+        if (!quiet && (in->dcm.bridge != last_bridge)) {
+          printf("  %8.3f  dcm: power stage %s -> %s\n", (double)t_us * 1e-6,
+                 (last_bridge == 1U) ? "A" : ((last_bridge == 2U) ? "B" : "none"),
+                 (in->dcm.bridge == 1U) ? "A" : ((in->dcm.bridge == 2U) ? "B" : "none (drive off)"));
         }
-      } else if (f->id == CANFDI_SIL_MSG_THR_ACTUATOR_FRAME_ID) {
-        struct canfdi_sil_msg_thr_actuator_t a;
-        if (canfdi_sil_msg_thr_actuator_unpack(&a, f->data, f->dlc) == 0) {
-          in.thr.u_cmd_V = canfdi_sil_msg_thr_actuator_thr_u_cmd_decode(a.thr_u_cmd);
-          in.thr.enable = (a.thr_enable != 0U);
-          if (!quiet && (in.thr.enable != last_thr_en)) {
-            printf("  %8.3f  thr: motor %s\n", (double)t_us * 1e-6,
-                   in.thr.enable ? "energised" : "de-energised (spring -> limp-home)");
-          }
-          last_thr_en = in.thr.enable;
+        last_bridge = in->dcm.bridge;
+      } else if (rx == CANFDI_SIM_RIG_RX_ACT_THR) {
+        if (!quiet && (in->thr.enable != last_thr_en)) {
+          printf("  %8.3f  thr: motor %s\n", (double)t_us * 1e-6,
+                 in->thr.enable ? "energised" : "de-energised (spring -> limp-home)");
         }
+        last_thr_en = in->thr.enable;
       } else if (f->id == CANFDI_SIL_MSG_ECU_STATUS_FRAME_ID) {
         if (canfdi_sil_msg_ecu_status_unpack(&ecu.status, f->data, f->dlc) == 0) {
           const unsigned ds[2] = {ecu.status.sts_deg_state_dcm, ecu.status.sts_deg_state_thr};
@@ -494,7 +483,6 @@ int main(int argc, char **argv)
         /* EcuDiagnosis: in the log only */
       }
     }
-    in.dcm.load_Nm = sp.load_Nm;
     if (symptoms && ((k % 100U) == 0U)) {
       const canfdi_symptoms_t *y = &app.sym;
       fprintf(stderr, "%6.2f rn %5.2f %5.2f %5.2f %5.2f v%x | pd %6.3f %6.3f %6.3f %6.3f v%x | thr rn %5.2f %5.2f %5.2f %5.2f pd %6.3f %6.3f %6.3f %6.3f v%x f%x\n",
@@ -510,9 +498,9 @@ int main(int argc, char **argv)
       fprintf(out,
               "%.3f,%.4g,%.5g,%.4g,%.5g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,"
               "%.5g,%.5g,%.5g,%.5g,%u,%u,%u,%u\n",
-              (double)t_us * 1e-6, sp.speed_rad_s, sim.dcm.w_rad_s, sp.angle_deg,
-              sim.thr.theta_rad * (180.0 / 3.14159265358979323846), in.dcm.u_cmd_V, in.thr.u_cmd_V,
-              sp.load_Nm, canfdi_sil_msg_ecu_residual_dcm_res_dcm_r1_decode(ecu.res_dcm.res_dcm_r1),
+              (double)t_us * 1e-6, sp->speed_rad_s, sim.dcm.w_rad_s, sp->angle_deg,
+              sim.thr.theta_rad * (180.0 / 3.14159265358979323846), in->dcm.u_cmd_V, in->thr.u_cmd_V,
+              sp->load_Nm, canfdi_sil_msg_ecu_residual_dcm_res_dcm_r1_decode(ecu.res_dcm.res_dcm_r1),
               canfdi_sil_msg_ecu_residual_dcm_res_dcm_r2_decode(ecu.res_dcm.res_dcm_r2),
               canfdi_sil_msg_ecu_residual_dcm_res_dcm_r3_decode(ecu.res_dcm.res_dcm_r3),
               canfdi_sil_msg_ecu_residual_dcm_res_dcm_r4_decode(ecu.res_dcm.res_dcm_r4),
@@ -523,9 +511,9 @@ int main(int argc, char **argv)
               canfdi_sil_msg_ecu_param_dcm_prm_dcm_ra_decode(ecu.prm_dcm.prm_dcm_ra),
               canfdi_sil_msg_ecu_param_dcm_prm_dcm_psi_decode(ecu.prm_dcm.prm_dcm_psi), sim.dcm.ra_ohm,
               canfdi_sil_msg_ecu_param_thr_prm_thr_r_decode(ecu.prm_thr.prm_thr_r), last_deg[0],
-              last_deg[1], (unsigned)in.dcm.bridge, in.thr.enable ? 1U : 0U);
+              last_deg[1], (unsigned)in->dcm.bridge, in->thr.enable ? 1U : 0U);
     }
-    canfdi_sim_step(&sim, &in);
+    canfdi_sim_rig_end(&rig);
     /* degradation expectations are judged at their time */
     for (i = 0U; i < scn.n_expects; i++) {
       const canfdi_sim_expect_t *e = &scn.expects[i];
