@@ -172,6 +172,8 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
       app->p2135_n = 0U;
       app->dcm_in_ok = false;
       app->thr_in_ok = false;
+      app->dcm_est_on = false;
+      app->thr_est_on = false;
       app->now_us = now_us;
       app->step_time_max_us = 0U;
       app->cycle_time_max_us = 0U;
@@ -330,16 +332,47 @@ static void step_detect(canfdi_app_t *app)
                       in_valid(app, CANFDI_RX_IN_DCM_OMEGA);
   const bool thr_ok = in_valid(app, CANFDI_RX_IN_THR_TPS1) && in_valid(app, CANFDI_RX_IN_THR_TPS2) &&
                       in_valid(app, CANFDI_RX_IN_THR_IMOT) && in_valid(app, CANFDI_RX_IN_THR_USUPPLY);
+  /* The estimators learn only from data their equations describe. An
+   * input known to be wrong would be learnt as a parameter change (a U_A
+   * offset as Psi and R_A; fed on, the estimate follows the sensor and its
+   * removal reads as the opposite fault), and a valve whose motor is not
+   * driven (limp-home, an open circuit, no valid position to control) obeys
+   * neither the armature equation nor the mechanical one with the motor's
+   * torque. Such data are not fed (the estimate is held, not forgotten);
+   * when feeding resumes the filters restart and the covariance is reset
+   * (keep_theta), so the estimate re-converges on good data, and the
+   * parameter symptoms stay invalid until it has (thr/dcm_pdev_valid from
+   * the converged flags, which the reset clears). Decisions use last step's
+   * monitors (the diagnosis, the symptom flags and the manager's command
+   * run after the detection).
+   * The U_A input is judged by the UAC monitor (measured U_A against the
+   * commanded voltage): a persistent UAC symptom or a latched U_A offset
+   * verdict. That monitor does not rest on the estimator, so holding the
+   * estimator cannot remove its own evidence; the speed-sensor faults are
+   * isolated through the estimator's Psi and J/Psi and are not used here. */
+  const int8_t uac = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR,
+                                              (uint8_t)CANFDI_DIAG_CH_DCM_UAC);
+  const bool ua_bad = (uac == CANFDI_DIAG_SYM_POS) || (uac == CANFDI_DIAG_SYM_NEG) ||
+                      ((app->faults & CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_UA_SENSOR_OFFSET)) != 0U);
+  const bool dcm_est = dcm_ok && !ua_bad;
+  const bool thr_est = thr_ok && app->mgr_out.thr.enable && app->vote_out.valid &&
+                       ((app->sym.flags & CANFDI_SYM_F_THR_NO_CURRENT) == 0U);
   if (dcm_ok && !app->dcm_in_ok && (app->diag.steps > 0U)) {
     canfdi_parity_dcm_reset(&app->parity_dcm);
-    canfdi_est_dcm_reset(&app->est_dcm, true);
   }
   if (thr_ok && !app->thr_in_ok && (app->diag.steps > 0U)) {
     canfdi_parity_thr_reset(&app->parity_thr);
+  }
+  if (dcm_est && !app->dcm_est_on && (canfdi_est_dcm_diag(&app->est_dcm)->steps > 0U)) {
+    canfdi_est_dcm_reset(&app->est_dcm, true);
+  }
+  if (thr_est && !app->thr_est_on && (canfdi_est_thr_diag(&app->est_thr)->steps > 0U)) {
     canfdi_est_thr_reset(&app->est_thr, true);
   }
   app->dcm_in_ok = dcm_ok;
   app->thr_in_ok = thr_ok;
+  app->dcm_est_on = dcm_est;
+  app->thr_est_on = thr_est;
   pd.u_V_q16 = in_val(app, CANFDI_RX_IN_DCM_UA);
   pd.i_A_q16 = in_val(app, CANFDI_RX_IN_DCM_IA);
   pd.w_rad_s_q16 = in_val(app, CANFDI_RX_IN_DCM_OMEGA);
@@ -348,6 +381,8 @@ static void step_detect(canfdi_app_t *app)
                                  canfdi_sub_s32_sat(pd.load_Nm_q16, app->cal.load_nom_Nm_q16));
   if (dcm_ok) {
     (void)canfdi_parity_dcm_step(&app->parity_dcm, &pd);
+  }
+  if (dcm_est) {
     canfdi_est_dcm_step(&app->est_dcm, pd.u_V_q16, pd.i_A_q16, pd.w_rad_s_q16);
   }
   pt.tps1_V_q16 = in_val(app, CANFDI_RX_IN_THR_TPS1);
@@ -358,6 +393,8 @@ static void step_detect(canfdi_app_t *app)
   pt.enabled = app->mgr_out.thr.enable;
   if (thr_ok) {
     (void)canfdi_parity_thr_step(&app->parity_thr, &pt);
+  }
+  if (thr_est) {
     canfdi_est_thr_step(&app->est_thr, pt.u_V_q16, pt.i_A_q16, app->vote_out.angle_rad_q16);
   }
 }
@@ -399,7 +436,7 @@ static void step_symptoms(canfdi_app_t *app)
                                 ed->mc_nom_q16, 16U)
             : 0;
   }
-  s->dcm_pdev_valid = !app->dcm_in_ok ? 0U :
+  s->dcm_pdev_valid = !app->dcm_est_on ? 0U :
       (uint8_t)((canfdi_est_dcm_arm_converged(&app->est_dcm) ? 0x03U : 0U) |
                 (canfdi_est_dcm_mech_converged(&app->est_dcm) ? 0x0CU : 0U));
   s->thr_pdev_q16[CANFDI_SYM_THR_P_R] = pdev_q16(canfdi_est_thr_r_q16(&app->est_thr), et->r_nom_q16);
@@ -411,7 +448,7 @@ static void step_symptoms(canfdi_app_t *app)
       pdev_q16(canfdi_est_thr_pretension_q16(&app->est_thr), et->pretension_nom_q16);
   s->thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] =
       pdev_q16(canfdi_est_thr_friction_q16(&app->est_thr), et->friction_nom_q16);
-  s->thr_pdev_valid = !app->thr_in_ok ? 0U : (uint8_t)((canfdi_est_thr_el_converged(&app->est_thr) ? 0x03U : 0U) |
+  s->thr_pdev_valid = !app->thr_est_on ? 0U : (uint8_t)((canfdi_est_thr_el_converged(&app->est_thr) ? 0x03U : 0U) |
                                 (canfdi_est_thr_mech_converged(&app->est_thr) ? 0x0CU : 0U));
 
   if (canfdi_limit_symptom(&app->tps_range[0]) == CANFDI_LIMIT_BELOW_MIN) {

@@ -19,7 +19,13 @@
  *                         in the mode the actuator manager set last step
  *   5. detection          parity_dcm, parity_thr (residuals), est_dcm,
  *                         est_thr (parameters; their RLS updates are
- *                         decimated inside the modules)
+ *                         decimated inside the modules). An estimator is
+ *                         not fed while an input of its equations is known
+ *                         bad (U_A: UAC symptom or a latched U_A offset) or
+ *                         its plant is not driven (throttle de-energised,
+ *                         no valid position, no current); it restarts with
+ *                         a covariance reset and its parameter symptoms
+ *                         stay invalid until it has re-converged
  *   6. symptoms           canfdi_symptoms_t
  *   7. diagnosis          canfdi_diagnosis_step: report per fault id
  *   8. DTC memory         diagnosis, manager and rx monitors -> canfdi_dtc,
@@ -71,7 +77,7 @@
  * 30..32 k instructions per step on average (`make sil-bench`). The same
  * run shows the ECU's frames bit-identical between the host build and both
  * target builds.
- * Memory: sizeof(canfdi_app_t) = 9288 bytes on Cortex-M0+/M4 (928 of them
+ * Memory: sizeof(canfdi_app_t) = 9408 bytes on Cortex-M0+/M4 (928 of them
  * the calibration copy), all of the application's RAM (static; `make
  * firmware` shows it in .bss); code ~5.4 kB for this module (M0+, -Os) on
  * top of the modules it calls. Stack: canfdi_app_step 296 bytes (M0+,
@@ -166,6 +172,8 @@ typedef struct {
   uint16_t p2135_n;              /* steps the disagreement stayed unisolated */
   bool dcm_in_ok;                /* U_A, I_A, omega VALID this step */
   bool thr_in_ok;                /* TPS1/2, current, supply usable this step */
+  bool dcm_est_on;               /* est_dcm fed this step (see step_detect) */
+  bool thr_est_on;               /* est_thr fed this step (see step_detect) */
   uint32_t now_us;
   uint32_t step_time_max_us;  /* port timing since the last EcuStatus (0 in SIL) */
   uint32_t cycle_time_max_us;

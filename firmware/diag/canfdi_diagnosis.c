@@ -173,6 +173,7 @@ static void pers_clear(canfdi_diagnosis_pers_t *p, int8_t state)
   p->state = state;
   p->cand = state;
   p->n = 0U;
+  p->quiet = UINT16_MAX; /* settled; clamped to sym_off_steps by channel() */
 }
 
 void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
@@ -303,6 +304,13 @@ static void channel(canfdi_diagnosis_t *d, uint32_t c, uint32_t j, int32_t x, bo
   canfdi_diagnosis_pers_t *p = &d->ch[c][j];
   d->x_q16[c][j] = valid ? x : 0;
   pers_step(p, valid, ternary(d, x, p->state), d->cfg.sym_on_steps, d->cfg.sym_off_steps);
+  if (valid && (abs_sat(x) >= d->cfg.off_q16)) {
+    p->quiet = 0U;
+  } else if (p->quiet < d->cfg.sym_off_steps) {
+    p->quiet++;
+  } else {
+    p->quiet = d->cfg.sym_off_steps; /* settled (also from pers_clear) */
+  }
 }
 
 /* Relative deviation / its threshold on that side, Q16.16. */
@@ -376,11 +384,13 @@ static void observe(canfdi_diagnosis_t *d, uint32_t c)
       pos = (uint16_t)(pos | b);
     } else if (st == CANFDI_DIAG_SYM_NEG) {
       neg = (uint16_t)(neg | b);
-    } else if ((st == CANFDI_DIAG_SYM_ZERO) && (d->ch[c][j].cand == CANFDI_DIAG_SYM_ZERO)) {
+    } else if ((st == CANFDI_DIAG_SYM_ZERO) && (d->ch[c][j].cand == CANFDI_DIAG_SYM_ZERO) &&
+               (d->ch[c][j].quiet >= d->cfg.sym_off_steps)) {
       /* "absent" only while settled: a channel on its way to +/- (its
        * persistence running) confirms no zero, else a fault whose
        * residuals cross their bands a few ms apart would be taken, for
-       * those ms, for the fault that leaves the late one at zero */
+       * those ms, for the fault that leaves the late one at zero; nor
+       * does one inside its hysteresis band (see the header) */
       zero = (uint16_t)(zero | b);
     } else {
       /* unknown: in none of the masks */

@@ -116,7 +116,18 @@
  * a channel at 0 whose persistence is running toward +/- counts as
  * unknown (it confirms no zero): residuals of one fault cross their bands
  * some ms apart (flux down: r4 ~25 ms after r1..r3), and in between the
- * pattern would read as another fault's (I_A offset, r4 = 0).
+ * pattern would read as another fault's (I_A offset, r4 = 0). Likewise a
+ * channel at 0 confirms a zero only after its value stayed below `off`
+ * for sym_off_steps (the persistence that takes a symptom back to 0; a
+ * channel that becomes valid starts settled, as its state starts at 0): a
+ * value in the hysteresis band [off, on) is neither a symptom nor its
+ * absence. Why: a slow I_A offset ramp moves r1 (-R dI) and r2/r3
+ * (Psi dI) together, but r2/r3 cross their bands first; with r1 hovering
+ * at -0.8..-0.93 for ~0.1 s the pattern r1 0, r2 +, r3 + was friction up
+ * (r1 Z) and P1A12 was confirmed 45 ms before the true P1A20 (SIL matrix
+ * dcm_ia_sensor_offset_incipient, seed 2). The friction hypothesis needs
+ * r1 clearly zero (the armature equation is untouched by friction), and
+ * an r1 that large is not.
  *
  * Matching (each step, per component without a fired hard rule):
  *  - detected = some channel persistently +/-.
@@ -193,8 +204,8 @@
  * cycles; ~0.15 ms at 48 MHz for 7 k.) Code: 3.7 kB (M0+), 3.5 kB (M4),
  * ROM tables included. Stack (-fstack-usage, M0+): step 176 bytes plus a
  * 40-byte callee.
- * Memory: sizeof(canfdi_diagnosis_t) = 596 bytes on a 32-bit target
- * (configuration copy 92, reciprocals 68, channel and flag persistence 120,
+ * Memory: sizeof(canfdi_diagnosis_t) = 656 bytes on a 32-bit target
+ * (configuration copy 92, reciprocals 68, channel and flag persistence 180,
  * normalised values 80, compiled rules 140, weights 40, results 16,
  * diagnostics 20, state). No heap, no globals besides const tables, no
  * floating point; reentrant per instance.
@@ -296,6 +307,7 @@ typedef struct {
   int8_t state; /* CANFDI_DIAG_SYM_* */
   int8_t cand;  /* candidate value being timed */
   uint16_t n;   /* consecutive steps of cand */
+  uint16_t quiet; /* consecutive steps below off, saturating at sym_off_steps */
 } canfdi_diagnosis_pers_t;
 
 typedef struct {

@@ -502,6 +502,41 @@ START_TEST(test_lagging_residual)
 }
 END_TEST
 
+/* A slow I_A offset ramp: r2/r3 cross their bands while r1 (-R dI) sits in
+ * its hysteresis band [off, on). That r1 is not a confirmed zero, so the
+ * friction rule (r1 Z) must not be isolated; once r1 crosses, I_A offset is.
+ * And a zero is confirmed again only after sym_off_steps below off. */
+START_TEST(test_band_is_not_zero)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 300U; k++) {
+    build(&s, &vecs[2] /* dcm_friction */, k, 0.0, 0.0);
+    s.dcm_rn_q16[CANFDI_SYM_DCM_R1] = Q16(-0.9);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_msg(rep[CANFDI_FAULT_DCM_FRICTION_UP] != CANFDI_DIAG_REPORT_FAILED, "friction at step %u", k);
+  }
+  for (k = 300U; k < 400U; k++) {
+    build(&s, &vecs[3] /* ia_offset */, k, 0.0, 0.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_IA_SENSOR_OFFSET);
+  /* the same friction pattern with r1 clearly inside off: friction, after
+   * r1 has stayed below off for sym_off_steps */
+  setup();
+  for (k = 0U; k < 300U; k++) {
+    build(&s, &vecs[2], k, 0.0, 0.0);
+    s.dcm_rn_q16[CANFDI_SYM_DCM_R1] = Q16((k < 100U) ? -0.9 : -0.5);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    if (k < 100U + cfg.sym_off_steps - 1U) {
+      ck_assert_msg(rep[CANFDI_FAULT_DCM_FRICTION_UP] != CANFDI_DIAG_REPORT_FAILED, "early at step %u", k);
+    }
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_FRICTION_UP);
+}
+END_TEST
+
 /* ---- partial patterns: supporting symptoms missing or contradicting -------- */
 
 /* Measured "weaker" cases of the bench (a supporting symptom below its band
@@ -627,6 +662,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_partial_pattern, 0, (int)N_PARTIAL);
   tcase_add_test(tc, test_confidence_monotone);
   tcase_add_test(tc, test_lagging_residual);
+  tcase_add_test(tc, test_band_is_not_zero);
   suite_add_tcase(s, tc);
   tc = tcase_create("false_alarms");
   tcase_add_test(tc, test_fault_free_passes);
