@@ -21,6 +21,12 @@ void canfdi_app_default_cal(canfdi_app_cal_t *cal)
 {
   if (cal != NULL) {
     canfdi_rx_default_cfg(&cal->rx);
+    /* First reception: the sensor node and the vehicle may boot up to 2 s
+     * after this ECU (a HIL bench starts its processes one after the
+     * other; a vehicle powers its nodes in sequence). Until then the inputs
+     * are INVALID and the drives are held off; after the first frame the
+     * normal 4/5-cycle windows apply. */
+    cal->rx.first_timeout_us = 2000000U;
     canfdi_ctrl_dcm_cal_default(&cal->ctrl_dcm);
     canfdi_ctrl_thr_cal_default(&cal->ctrl_thr);
     /* Speed excitation for the parameter estimators: a +-5 rad/s PRBS with
@@ -172,6 +178,8 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
       app->p2135_n = 0U;
       app->dcm_in_ok = false;
       app->thr_in_ok = false;
+      app->dcm_started = false;
+      app->thr_started = false;
       app->dcm_est_on = false;
       app->thr_est_on = false;
       app->now_us = now_us;
@@ -253,8 +261,15 @@ static void step_vote(canfdi_app_t *app)
   const canfdi_parity_thr_out_t *po = canfdi_parity_thr_out(&app->parity_thr);
   const uint8_t pos_bits =
       (uint8_t)((1U << CANFDI_PARITY_THR_POS1) | (1U << CANFDI_PARITY_THR_POS2));
-  (void)canfdi_limit_step(&app->tps_range[0], in_val(app, CANFDI_RX_IN_THR_TPS1));
-  (void)canfdi_limit_step(&app->tps_range[1], in_val(app, CANFDI_RX_IN_THR_TPS2));
+  /* A range check judges a sensor's voltage, not the stand-in of an input
+   * that never arrived or was lost (INVALID: the rx default or the last
+   * value past its timeout); that case is the communication monitors'. */
+  if (app->rx.in[CANFDI_RX_IN_THR_TPS1].quality != (uint8_t)CANFDI_RX_INVALID) {
+    (void)canfdi_limit_step(&app->tps_range[0], in_val(app, CANFDI_RX_IN_THR_TPS1));
+  }
+  if (app->rx.in[CANFDI_RX_IN_THR_TPS2].quality != (uint8_t)CANFDI_RX_INVALID) {
+    (void)canfdi_limit_step(&app->tps_range[1], in_val(app, CANFDI_RX_IN_THR_TPS2));
+  }
   vin.tps1_V_q16 = in_val(app, CANFDI_RX_IN_THR_TPS1);
   vin.tps2_V_q16 = in_val(app, CANFDI_RX_IN_THR_TPS2);
   vin.tps1_valid = in_valid(app, CANFDI_RX_IN_THR_TPS1) &&
@@ -371,6 +386,8 @@ static void step_detect(canfdi_app_t *app)
   }
   app->dcm_in_ok = dcm_ok;
   app->thr_in_ok = thr_ok;
+  app->dcm_started = app->dcm_started || dcm_ok;
+  app->thr_started = app->thr_started || thr_ok;
   app->dcm_est_on = dcm_est;
   app->thr_est_on = thr_est;
   pd.u_V_q16 = in_val(app, CANFDI_RX_IN_DCM_UA);
@@ -839,6 +856,11 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     mi.fail_silent = false;
     mi.now_ms = now_us / 1000U;
     (void)canfdi_actmgr_step(&app->actmgr, &mi, &app->vote_out, &app->mgr_out);
+    /* Start-up inhibit: no drive is energised before its plant's inputs
+     * were valid once (the sensor node may boot after this ECU, see
+     * cal.rx.first_timeout_us); afterwards the manager alone decides. */
+    app->mgr_out.dcm.enable = app->mgr_out.dcm.enable && app->dcm_started;
+    app->mgr_out.thr.enable = app->mgr_out.thr.enable && app->thr_started;
     /* 10. outputs */
     queue_dtc_events(app);
     rc = step_outputs(app, out);

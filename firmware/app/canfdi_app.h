@@ -172,6 +172,8 @@ typedef struct {
   uint16_t p2135_n;              /* steps the disagreement stayed unisolated */
   bool dcm_in_ok;                /* U_A, I_A, omega VALID this step */
   bool thr_in_ok;                /* TPS1/2, current, supply usable this step */
+  bool dcm_started;              /* dcm_in_ok was true once (start-up inhibit) */
+  bool thr_started;              /* thr_in_ok was true once */
   bool dcm_est_on;               /* est_dcm fed this step (see step_detect) */
   bool thr_est_on;               /* est_thr fed this step (see step_detect) */
   uint32_t now_us;

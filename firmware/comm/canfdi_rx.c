@@ -126,7 +126,8 @@ static uint32_t age_us(uint32_t now_us, uint32_t then_us)
 
 static uint32_t window_us(const canfdi_rx_t *rx, unsigned f)
 {
-  return (uint32_t)rx->cfg.frame[f].timeout_cycles * frame_info[f].cycle_us;
+  const uint32_t w = (uint32_t)rx->cfg.frame[f].timeout_cycles * frame_info[f].cycle_us;
+  return (!rx->frame[f].received && (rx->cfg.first_timeout_us > w)) ? rx->cfg.first_timeout_us : w;
 }
 
 static void signal_error(canfdi_rx_signal_state_t *s)
@@ -325,6 +326,7 @@ void canfdi_rx_default_cfg(canfdi_rx_cfg_t *cfg)
     for (unsigned i = 0U; i < (unsigned)CANFDI_RX_IN_COUNT; i++) {
       cfg->default_q16[i] = 0;
     }
+    cfg->first_timeout_us = 0U;
   }
 }
 

@@ -43,7 +43,10 @@
  * step at which the timeout_cycles-th consecutive frame is missing: with the
  * default 4 for the 1 ms frames, frames up to t, nothing after -> steps
  * t+1..t+3 ms pre-passed, t+4 ms pre-failed. Before the first reception the
- * supervision runs from init (startup timeout, same length). A timed-out
+ * supervision runs from init with the window first_timeout_us when that is
+ * longer (startup timeout; AUTOSAR COM's "first timeout": the other nodes
+ * of a bus boot at their own pace, so an ECU that starts before its sensor
+ * node must not latch a communication fault for it), else the same window. A timed-out
  * frame is latched until its next reception, so a uint32_t time stamp
  * wrapping (71 min) cannot clear it. The timeout monitor reports every step
  * once the frame was received at least once or has timed out (no verdict
@@ -228,6 +231,8 @@ typedef struct {
 typedef struct {
   canfdi_rx_frame_cfg_t frame[CANFDI_RX_F_COUNT];
   int32_t default_q16[CANFDI_RX_IN_COUNT]; /* INVALID value before the first sample */
+  uint32_t first_timeout_us; /* timeout window before a frame's first reception
+                                if longer than its normal window (0: none) */
 } canfdi_rx_cfg_t;
 
 /* Monotone counters, saturating at UINT32_MAX. */

@@ -63,9 +63,10 @@ START_TEST(test_output_schedule)
 }
 END_TEST
 
-/* No sensor frame ever arrives: after the startup timeout both U-codes
- * fail, the DC motor goes fail-safe with the drive off, and the throttle
- * (no valid position) is de-energised. */
+/* No sensor frame ever arrives: during the first-reception window
+ * (cal.rx.first_timeout_us) no U-code and the drives are held off; after it
+ * both U-codes fail, the DC motor goes fail-safe with the drive off, and
+ * the throttle (no valid position) is de-energised. */
 START_TEST(test_no_sensor_frames)
 {
   canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
@@ -73,7 +74,14 @@ START_TEST(test_no_sensor_frames)
   int32_t st;
   canfdi_app_default_cal(&cal);
   ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
-  for (k = 1U; k <= 200U; k++) {
+  ck_assert_uint_ge(cal.rx.first_timeout_us, 100000U);
+  for (k = 1U; k < (cal.rx.first_timeout_us / 1000U); k++) {
+    ck_assert_int_ge(canfdi_app_step(&app, k * 1000U, out), 2);
+    ck_assert_uint_eq(canfdi_dtc_count_by_mask(canfdi_app_dtc(&app), (uint8_t)CANFDI_DTC_ST_TF), 0U);
+    ck_assert(!app.mgr_out.dcm.enable);
+    ck_assert(!app.mgr_out.thr.enable);
+  }
+  for (; k <= (cal.rx.first_timeout_us / 1000U) + 200U; k++) {
     ck_assert_int_ge(canfdi_app_step(&app, k * 1000U, out), 2);
   }
   st = canfdi_dtc_status(canfdi_app_dtc(&app),

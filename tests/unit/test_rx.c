@@ -364,6 +364,44 @@ START_TEST(startup_invalid_then_timeout)
 }
 END_TEST
 
+/* first_timeout_us: before the first reception the window is the longer
+ * startup window (no verdict, no timeout during it); once a frame has
+ * arrived the normal 4-cycle window applies. */
+START_TEST(first_timeout_window)
+{
+  canfdi_rx_cfg_t cfg;
+  canfdi_rx_default_cfg(&cfg);
+  cfg.first_timeout_us = 20000U; /* 20 steps */
+  setup_cfg(&cfg);
+  for (unsigned k = 1U; k <= 25U; k++) {
+    cycle(false, false, false, nominal_raw);
+    if (k < 20U) {
+      ck_assert_int_eq(canfdi_rx_monitor_result(&rx, CANFDI_RX_MON_DCM_TIMEOUT), -CANFDI_ENODATA);
+      ck_assert_uint_eq(rx.diag.timeouts[CANFDI_RX_F_DCM_SENSOR], 0U);
+    } else {
+      ck_assert(failed(CANFDI_RX_MON_DCM_TIMEOUT));
+    }
+  }
+  /* a sensor node that boots inside the window: no timeout at all, and
+   * after its first frame a loss is seen after the normal 4 cycles */
+  setup_cfg(&cfg);
+  for (unsigned k = 1U; k <= 15U; k++) {
+    cycle(false, false, false, nominal_raw);
+  }
+  cycle(true, true, false, nominal_raw);
+  ck_assert(passed(CANFDI_RX_MON_DCM_TIMEOUT));
+  ck_assert_uint_eq(rx.diag.timeouts[CANFDI_RX_F_DCM_SENSOR], 0U);
+  for (unsigned k = 1U; k <= 4U; k++) {
+    cycle(false, true, false, nominal_raw);
+    if (k < 4U) {
+      ck_assert(passed(CANFDI_RX_MON_DCM_TIMEOUT));
+    } else {
+      ck_assert(failed(CANFDI_RX_MON_DCM_TIMEOUT));
+    }
+  }
+}
+END_TEST
+
 /* Timeout exactly at the timeout_cycles-th missing frame, for several
  * configurations; recovery after recover_frames good frames. */
 START_TEST(timeout_exactly_after_n_missed_cycles)
@@ -1229,6 +1267,7 @@ static Suite *make_suite(void)
   tc = tcase_create("supervision");
   tcase_add_test(tc, healthy_stream_is_valid_and_passes);
   tcase_add_test(tc, startup_invalid_then_timeout);
+  tcase_add_test(tc, first_timeout_window);
   tcase_add_loop_test(tc, timeout_exactly_after_n_missed_cycles, 0, 6);
   tcase_add_test(tc, setpoint_timeout_and_range);
   tcase_add_loop_test(tc, error_type_reports_its_u_code, 0, 8);
