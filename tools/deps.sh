@@ -2,7 +2,9 @@
 # Install what canfdi needs and nothing else; idempotent.
 #   1. Debian packages (only those missing; apt-get runs only if one is).
 #   2. A project-local Python venv (.venv) with the pinned requirements.txt,
-#      reinstalled only when requirements.txt changes.
+#      reinstalled only when requirements.txt changes; the editable tools
+#      package (console commands canfdi-*) reinstalled when requirements.txt
+#      or tools/pyproject.toml changes.
 # A second run on a ready machine does no network access and takes ~1 s.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -45,10 +47,19 @@ if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
   echo "deps: creating Python venv $VENV from requirements.txt"
   [ -x "$VENV/bin/python" ] || "$PY" -m venv "$VENV"
   "$VENV/bin/pip" install -q --disable-pip-version-check -r requirements.txt </dev/null
-  if [ -f tools/pyproject.toml ]; then
-    "$VENV/bin/pip" install -q --disable-pip-version-check --no-deps --no-build-isolation -e tools </dev/null
-  fi
   echo "$want" > "$stamp"
 else
   echo "deps: Python venv up to date ($VENV)"
+fi
+
+# The editable install writes the console scripts from tools/pyproject.toml:
+# a new [project.scripts] entry needs a reinstall even though no code moved.
+tools_stamp="$VENV/.tools.sha256"
+if [ -f tools/pyproject.toml ]; then
+  tools_want=$(cat requirements.txt tools/pyproject.toml | sha256sum | cut -d' ' -f1)
+  if [ "$(cat "$tools_stamp" 2>/dev/null)" != "$tools_want" ]; then
+    echo "deps: installing the canfdi tools package (editable, tools/pyproject.toml)"
+    "$VENV/bin/pip" install -q --disable-pip-version-check --no-deps --no-build-isolation -e tools </dev/null
+    echo "$tools_want" > "$tools_stamp"
+  fi
 fi

@@ -1,8 +1,17 @@
 """canfdi Python tools.
 
 Modules:
-  catalogue  the fault catalogue (dbc/faults.csv) and DTC table (dbc/dtcs.csv)
-  e2e        CRC-8 SAE J1850 and rolling-counter protection of 1 ms frames
+  catalogue      the fault catalogue (dbc/faults.csv) and DTC table (dbc/dtcs.csv)
+  e2e            CRC-8 SAE J1850 and rolling-counter protection of 1 ms frames
+  plot           PNG of a canfdi-sil trace
+  busargs        -i/-c/-b bus options and defaults, as python-can's tools
+  logio          tolerant reading of recorded logs (candump .log and can.LogReader)
+  timeline       frames -> diagnostic events on simulated time
+  scenario_file  duration/fault/expect lines of a scenario (host_sim/SCENARIO.md)
+  expect         canfdi-sil's judgement of expect lines, on a timeline
+  hil            ECU/sim processes and the bus recorder of a HIL run
+Console commands: canfdi-inject (inject), canfdi-watch (watch),
+canfdi-scenario (scenario_run).
 """
 from pathlib import Path
 

@@ -1,0 +1,148 @@
+"""canfdi-scenario without vcan: the scenario reader, process start/stop with
+stub programs, and the whole record-and-judge path with --no-start on the
+virtual interface fed by a lockstep replay of a SIL log."""
+from __future__ import annotations
+
+import json
+import stat
+import sys
+from pathlib import Path
+
+import pytest
+
+from canfdi.hil import ProcError, start_ecu, start_sim
+from canfdi.scenario_file import ScenarioError, check_with_c, parse
+from canfdi.scenario_run import main
+
+from conftest import Replayer, as_lockstep, sil_msgs
+
+STUB_ECU = """#!{py}
+import signal, sys, time
+mode = "{mode}"
+signal.signal(signal.SIGTERM, lambda *a: sys.exit(0))   # before 'ready', as canfdi-ecu must
+if mode == "exit":
+    print("canfdi-ecu: cannot open vcan0: No such device", file=sys.stderr); sys.exit(1)
+if mode == "ready":
+    print("canfdi-ecu: ready on vcan0 (lockstep)", file=sys.stderr, flush=True)
+while True:
+    time.sleep(0.05)
+"""
+
+
+def stub(tmp_path: Path, name: str, mode: str) -> Path:
+    """An executable that behaves like canfdi-ecu in one way (mode)."""
+    p = tmp_path / name
+    p.write_text(STUB_ECU.format(py=sys.executable, mode=mode))
+    p.chmod(p.stat().st_mode | stat.S_IXUSR)
+    return p
+
+
+def write(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "t.scn"
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("text,needle", [
+    ("fault 1 dcm_ra_up abrupt 0.2\n", "no duration"),
+    ("duration 5\nfault 1 dcm_ra_upp abrupt 0.2\n", "t.scn:2: unknown fault 'dcm_ra_upp'"),
+    ("duration 5\nfault 1 thr_jammed incipient 1 2\n", "t.scn:2: fault thr_jammed cannot be incipient"),
+    ("duration 5\n\nexpect 3 dtc P9999\n", "t.scn:3: unknown trouble code 'P9999'"),
+    ("duration 5\nexpect 6 no_dtc\n", "t.scn:2: expectation after the end"),
+    ("duration 5\nexpect 3 degradation dcm broken\n", "t.scn:2: degradation 'broken' must be"),
+    ("duration 5\nwobble 3\n", "t.scn:2: unknown directive 'wobble'"),
+])
+def test_scenario_errors_name_file_and_line(tmp_path: Path, text: str, needle: str) -> None:
+    with pytest.raises(ScenarioError, match=needle.replace("(", r"\(")):
+        parse(write(tmp_path, text))
+
+
+def test_scenario_parts_and_c_parser_agree(tmp_path: Path) -> None:
+    scn = parse(Path("tests/sil/scenarios/tps_both_lost.scn"))
+    assert scn.duration_us > 0 and scn.faults[0].name == "thr_tps_both_lost"
+    assert {e.kind for e in scn.expects} >= {"dtc", "degradation"}
+    assert check_with_c(Path("tests/sil/scenarios/tps_both_lost.scn")) is None
+    msg = check_with_c(write(tmp_path, "duration 5\nfault 1 dcm_ra_upp abrupt 0.2\n"))
+    assert msg is None or "unknown fault 'dcm_ra_upp'" in msg   # None when canfdi-sim is not built
+
+
+def test_ecu_ready_handshake_and_sigterm(tmp_path: Path) -> None:
+    ecu = start_ecu(stub(tmp_path, "ecu", "ready"), "vcan0", ready_timeout_s=10)
+    assert ecu.poll() is None and ecu.lines == ["canfdi-ecu: ready on vcan0 (lockstep)"]
+    assert ecu.stop() == 0
+
+
+def test_ecu_exit_and_silence_are_clear_errors(tmp_path: Path) -> None:
+    with pytest.raises(ProcError, match="exited with status 1 before it was ready: canfdi-ecu: cannot open vcan0"):
+        start_ecu(stub(tmp_path, "ecu1", "exit"), "vcan0")
+    with pytest.raises(ProcError, match="did not say 'canfdi-ecu: ready on ...' within 0.5 s; killed"):
+        start_ecu(stub(tmp_path, "ecu2", "silent"), "vcan0", ready_timeout_s=0.5)
+    with pytest.raises(ProcError, match="cannot start canfdi-ecu"):
+        start_ecu(tmp_path / "missing", "vcan0")
+
+
+def test_started_run_with_stub_programs(tmp_path: Path, channel: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """ECU ready, sim runs and exits 0, ECU stopped with SIGTERM -> nothing recorded is an error, not a hang."""
+    sim = tmp_path / "sim"
+    sim.write_text("#!/bin/sh\nsleep 0.3\nexit 0\n")
+    sim.chmod(0o755)
+    js = tmp_path / "r.json"
+    rc = main(["tests/sil/scenarios/tps1_open.scn", "-i", "virtual", "-c", channel, "-q",
+               "--ecu", str(stub(tmp_path, "ecu", "ready")), "--sim", str(sim),
+               "--log", str(tmp_path / "r.log"), "--json", str(js)])
+    assert rc == 1
+    res = json.loads(js.read_text())
+    assert res["errors"] == ["no SimStep frame recorded in a lockstep run (is canfdi-sim --lockstep on this bus?)"]
+    assert "ERROR no SimStep" in capsys.readouterr().out
+
+
+def test_sim_command_line(tmp_path: Path) -> None:
+    args = tmp_path / "args"
+    sim = tmp_path / "sim"
+    sim.write_text(f'#!/bin/sh\necho "$@" > {args}\n')
+    sim.chmod(0o755)
+    p = start_sim(sim, "vcan3", Path("x.scn"), lockstep=False, seed=7)
+    p.popen.wait(timeout=10)
+    assert args.read_text().split() == ["--can", "vcan3", "-s", "x.scn", "--realtime", "-q", "--seed", "7"]
+
+
+def run_no_start(channel: str, log_msgs: list, tmp_path: Path, scn: str, drop=frozenset()) -> tuple[int, dict]:
+    rp = Replayer(channel, as_lockstep(log_msgs, drop), listeners=2)
+    rp.start()
+    js = tmp_path / "r.json"
+    rc = main([scn, "--no-start", "-i", "virtual", "-c", channel, "--log", str(tmp_path / "rec.log"),
+               "--json", str(js), "--timeout", "120"])
+    rp.join(timeout=60)
+    return rc, json.loads(js.read_text())
+
+
+@pytest.mark.parametrize("name", ["tps1_open", "bridge_a_dead"])
+def test_no_start_records_and_judges_like_sil(sil_run, channel: str, tmp_path: Path, name: str,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    run = sil_run(name)
+    rc, res = run_no_start(channel, sil_msgs(run.log), tmp_path, str(run.rel))
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    assert [ln for ln in out.splitlines() if ln.startswith(("PASS ", "FAIL "))] == run.verdict_lines
+    assert res["passed"] and res["mode"] == "lockstep" and not res["errors"]
+    assert res["steps"] == parse(run.rel).steps
+    assert all(e["ok"] for e in res["expectations"])
+    # the recording is a candump log python-can and cantools can read
+    import can
+    assert sum(1 for _ in can.LogReader(tmp_path / "rec.log")) == res["frames"]
+
+
+def test_no_start_lost_steps_are_an_error(sil_run, channel: str, tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    run = sil_run("tps1_open")
+    rc, res = run_no_start(channel, sil_msgs(run.log), tmp_path, str(run.rel), frozenset({1500, 1501}))
+    assert rc == 1
+    assert any("2 SimStep frame(s) lost" in e for e in res["errors"])
+    assert "ERROR recording incomplete: 2 SimStep frame(s) lost" in capsys.readouterr().out
+
+
+def test_missing_programs_and_bad_scenario_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["tests/sil/scenarios/tps1_open.scn", "--ecu", str(tmp_path / "nope")]) == 2
+    assert "not built" in capsys.readouterr().err
+    assert main([str(write(tmp_path, "duration 5\nexpect 1 dtc P9999\n"))]) == 2
+    assert "t.scn:2: unknown trouble code" in capsys.readouterr().err

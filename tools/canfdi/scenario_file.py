@@ -1,0 +1,211 @@
+"""The parts of a scenario file (host_sim/SCENARIO.md) the Python tools need.
+
+The C parser (``canfdi-sim --check -s FILE``) is the authority on the whole
+format; this reader takes only ``duration``, ``seed``, ``fault`` and
+``expect`` lines, checks what it takes with the same file:line messages, and
+accepts every other known directive without looking at it. ``check_with_c``
+runs the C parser too when it has been built, so a file the HIL tools accept
+is never one the simulator would refuse.
+
+    scn = parse(Path("tests/sil/scenarios/tps1_open.scn"))
+    scn.duration_us, scn.faults[0].name, scn.expects[0]   # 6000000, 'thr_tps1_open', Expect(...)
+"""
+from __future__ import annotations
+
+import math
+import subprocess
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from . import REPO_ROOT
+from .catalogue import MODES, dtc_by_code, fault_by_name
+
+MAX_DURATION_S = 100000.0
+DIRECTIVES = ("duration", "seed", "noise", "init", "param", "speed", "angle", "load", "fault", "expect")
+SIM_BIN = REPO_ROOT / "build" / "bin" / "canfdi-sim"
+
+
+class ScenarioError(ValueError):
+    """'file:line: reason', as the C parser words it."""
+
+
+def to_us(t_s: float) -> int:
+    """Seconds -> whole µs, rounding half away from zero like C's llround."""
+    return int(math.floor(abs(t_s) * 1e6 + 0.5)) * (1 if t_s >= 0 else -1)
+
+
+@dataclass(frozen=True)
+class FaultLine:
+    line: int
+    t_start_us: int
+    name: str
+    mode: str
+    magnitude: float | None      # None = 'default'
+    ramp_s: float = 0.0
+    period_s: float = 0.0
+    duty: float = 0.0
+
+
+@dataclass(frozen=True)
+class Expect:
+    line: int
+    t_s: float
+    kind: str                    # dtc | no_dtc | degradation
+    arg1: str = ""               # code or subsystem
+    arg2: str = ""               # pending|confirmed|'' or the state
+
+    @property
+    def t_us(self) -> int:
+        return to_us(self.t_s)
+
+
+@dataclass
+class Scenario:
+    path: Path
+    duration_s: float = 0.0
+    seed: int = 1
+    faults: list[FaultLine] = field(default_factory=list)
+    expects: list[Expect] = field(default_factory=list)
+
+    @property
+    def duration_us(self) -> int:
+        return to_us(self.duration_s)
+
+    @property
+    def steps(self) -> int:
+        return round(self.duration_s * 1000.0)
+
+
+def _num(where: str, tok: str, what: str, lo: float, hi: float) -> float:
+    try:
+        v = float(tok)
+    except ValueError:
+        raise ScenarioError(f"{where}: {what} '{tok}' is not a number") from None
+    if not math.isfinite(v) or not lo <= v <= hi:
+        raise ScenarioError(f"{where}: {what} {tok} out of range {lo:g}..{hi:g}")
+    return v
+
+
+def _fault(where: str, n: int, tok: list[str]) -> FaultLine:
+    usage = ("fault <t_start> <name> abrupt <magnitude> | incipient <magnitude> <ramp_s> | "
+             "intermittent <magnitude> <period_s> <duty>")
+    if len(tok) < 5:
+        raise ScenarioError(f"{where}: {usage}")
+    t0 = _num(where, tok[1], "fault start time", 0.0, MAX_DURATION_S)
+    f = fault_by_name().get(tok[2])
+    if f is None:
+        raise ScenarioError(f"{where}: unknown fault '{tok[2]}' (see dbc/faults.csv or canfdi-sim --list-faults)")
+    mode = tok[3]
+    if mode not in MODES:
+        raise ScenarioError(f"{where}: unknown fault mode '{mode}' (abrupt, incipient, intermittent)")
+    if mode not in f.modes:
+        raise ScenarioError(f"{where}: fault {f.name} cannot be {mode} (allowed: {', '.join(f.modes)})")
+    mag = None if tok[4] == "default" else _num(where, tok[4], "fault magnitude", -1e9, 1e9)
+    want = {"abrupt": 5, "incipient": 6, "intermittent": 7}[mode]
+    if len(tok) != want:
+        raise ScenarioError(f"{where}: {usage}")
+    ramp = _num(where, tok[5], "ramp_s", 1e-6, MAX_DURATION_S) if mode == "incipient" else 0.0
+    period = _num(where, tok[5], "period_s", 2e-6, MAX_DURATION_S) if mode == "intermittent" else 0.0
+    duty = 0.0
+    if mode == "intermittent":
+        duty = _num(where, tok[6], "duty", 0.0, 1.0)
+        if duty <= 0.0:
+            raise ScenarioError(f"{where}: duty '{tok[6]}' must be a number in (0, 1]")
+    return FaultLine(n, to_us(t0), f.name, mode, mag, ramp, period, duty)
+
+
+def _expect(where: str, n: int, tok: list[str]) -> Expect:
+    if not 3 <= len(tok) <= 5:
+        raise ScenarioError(f"{where}: expect <t> dtc <code> [pending|confirmed] | expect <t> no_dtc"
+                            " | expect <t> degradation <dcm|thr> <state>")
+    t = _num(where, tok[1], "expect time", 0.0, MAX_DURATION_S)
+    kind = tok[2]
+    if kind == "dtc":
+        if len(tok) < 4:
+            raise ScenarioError(f"{where}: expect <t> dtc <code> [pending|confirmed]")
+        if tok[3] not in dtc_by_code():
+            raise ScenarioError(f"{where}: unknown trouble code '{tok[3]}' (see dbc/dtcs.csv)")
+        if len(tok) == 5 and tok[4] not in ("pending", "confirmed"):
+            raise ScenarioError(f"{where}: dtc status '{tok[4]}' must be pending or confirmed")
+    elif kind == "no_dtc":
+        if len(tok) != 3:
+            raise ScenarioError(f"{where}: expect <t> no_dtc")
+    elif kind == "degradation":
+        if len(tok) != 5:
+            raise ScenarioError(f"{where}: expect <t> degradation <dcm|thr> <normal|degraded|fail_safe>")
+        if tok[3] not in ("dcm", "thr"):
+            raise ScenarioError(f"{where}: subsystem '{tok[3]}' must be dcm or thr")
+        if tok[4] not in ("normal", "degraded", "fail_safe"):
+            raise ScenarioError(f"{where}: degradation '{tok[4]}' must be normal, degraded or fail_safe")
+    else:
+        raise ScenarioError(f"{where}: unknown expectation '{kind}' (dtc, no_dtc, degradation)")
+    return Expect(n, t, kind, tok[3] if len(tok) > 3 else "", tok[4] if len(tok) > 4 else "")
+
+
+def parse(path: Path) -> Scenario:
+    """Read a scenario; ScenarioError 'file:line: reason' on the first problem."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        raise ScenarioError(f"{path}: cannot read: {e}") from None
+    scn = Scenario(path)
+    have_duration = False
+    for n, raw in enumerate(text.splitlines(), 1):
+        where = f"{path}:{n}"
+        tok = raw.split("#", 1)[0].split()
+        if not tok:
+            continue
+        d = tok[0]
+        if d not in DIRECTIVES:
+            raise ScenarioError(f"{where}: unknown directive '{d}' ({', '.join(DIRECTIVES)})")
+        if d == "duration":
+            if have_duration:
+                raise ScenarioError(f"{where}: duplicate duration")
+            if len(tok) != 2:
+                raise ScenarioError(f"{where}: duration <s>")
+            scn.duration_s = _num(where, tok[1], "duration", 0.001, MAX_DURATION_S)
+            have_duration = True
+        elif d == "seed" and len(tok) == 2 and tok[1].isdigit():
+            scn.seed = int(tok[1])
+        elif d == "fault":
+            scn.faults.append(_fault(where, n, tok))
+        elif d == "expect":
+            scn.expects.append(_expect(where, n, tok))
+    if not have_duration:
+        raise ScenarioError(f"{path}: no duration (required)")
+    for f in scn.faults:
+        if f.t_start_us >= scn.duration_us:
+            raise ScenarioError(f"{path}:{f.line}: fault starts at or after the end of the scenario")
+    for e in scn.expects:
+        if e.t_s > scn.duration_s:
+            raise ScenarioError(f"{path}:{e.line}: expectation after the end of the scenario "
+                                f"(duration {scn.duration_s:g} s)")
+    return scn
+
+
+def check_with_c(path: Path, sim: Path = SIM_BIN) -> str | None:
+    """Run the C parser when built: its message if it refuses the file (exit 2), else None.
+
+    Any other failure (not built, cannot run here — e.g. an ASan build inside
+    User-Mode Linux) leaves the verdict to the Python reader: the sim itself
+    will refuse a bad file again when it starts.
+    """
+    if not sim.is_file():
+        return None
+    try:
+        r = subprocess.run([str(sim), "--check", "-s", str(path)], capture_output=True, text=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    if r.returncode != 2:
+        return None
+    msg = [ln for ln in r.stderr.splitlines() if ln.startswith("canfdi-sim:")]
+    return msg[-1] if msg else f"canfdi-sim --check refused {path} (exit 2)"
+
+
+def load(path: Path, sim: Path = SIM_BIN) -> Scenario:
+    """parse() + the C parser's verdict; ScenarioError on either's refusal."""
+    scn = parse(path)
+    err = check_with_c(path, sim)
+    if err is not None:
+        raise ScenarioError(err.removeprefix("canfdi-sim: "))
+    return scn
