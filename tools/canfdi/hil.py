@@ -22,7 +22,7 @@ from typing import IO
 
 import can
 
-from .timeline import ID_PLANT, ID_STEP, load_db
+from .timeline import ID_PLANT, ID_STEP, Timeline, load_db
 
 READY_PREFIX = "canfdi-ecu: ready on"
 #: Socket receive buffer asked for: the sim does not wait for the recorder, and
@@ -151,8 +151,14 @@ class Recorder(can.Listener):
     thread keeps up.
     """
 
-    def __init__(self, bus: can.BusABC, log_path: Path, rcvbuf: int = RCVBUF_BYTES) -> None:
+    def __init__(self, bus: can.BusABC, log_path: Path, rcvbuf: int = RCVBUF_BYTES,
+                 live: bool = False) -> None:
         super().__init__()
+        #: With live, every frame is also decoded into a Timeline and its new
+        #: events are printed at once (the technician's live view; costs the
+        #: decoding of every frame in the notifier thread).
+        self.live_tl: Timeline | None = Timeline() if live else None
+        self._live_printed = 0
         log_path.parent.mkdir(parents=True, exist_ok=True)
         self.bus = bus
         self.log_path = log_path
@@ -175,6 +181,12 @@ class Recorder(can.Listener):
             self.t_first = now
         self.frames += 1
         self.t_last = now
+        if self.live_tl is not None:
+            self.live_tl.feed(msg)
+            events = self.live_tl.events
+            while self._live_printed < len(events):
+                print(events[self._live_printed].line(), flush=True)
+                self._live_printed += 1
         try:
             if msg.arbitration_id == ID_STEP and len(msg.data) == 8:
                 self.last_step = int(self._step_msg.decode(bytes(msg.data))["SimStepIndex"])

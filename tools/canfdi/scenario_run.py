@@ -221,6 +221,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ready-timeout", type=float, default=10.0, metavar="S", help="wait for the ECU's ready line")
     p.add_argument("--timeout", type=float, metavar="S",
                    help="wall-clock limit of the run (default 60 s + 30 x the duration)")
+    p.add_argument("--live", action="store_true",
+                   help="print the timeline while the run goes (each frame decoded as it arrives)")
     p.add_argument("-q", "--quiet", action="store_true", help="no timeline or progress, verdicts only")
     return p
 
@@ -249,7 +251,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"canfdi-scenario: {e}", file=sys.stderr)
         return 1
     try:
-        rec = Recorder(bus, log)
+        if a.live and not a.quiet:
+            print("\n  time [s]  event (live)", flush=True)
+        rec = Recorder(bus, log, live=a.live and not a.quiet)
         try:
             if a.no_start:
                 run_no_start(a, scn, rec, res)
@@ -264,7 +268,7 @@ def main(argv: list[str] | None = None) -> int:
         bus.shutdown()
     res.wall_s = time.monotonic() - t0
     lockstep = not a.realtime and not a.no_start
-    tl, verdicts = evaluate_log(scn, log, res, not a.no_start, lockstep, a.quiet)
+    tl, verdicts = evaluate_log(scn, log, res, not a.no_start, lockstep, a.quiet or a.live)
     print(summary_line(verdicts + [Verdict(False, e, 0, "") for e in res.errors], str(scn.path))
           + f"  [{tl.stats.frames} frames, {res.wall_s:.1f} s wall, log {log}]")
     if a.json is not None:
