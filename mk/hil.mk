@@ -26,3 +26,37 @@ bench-hil: deps $(HIL_ECU_REL) $(HIL_SIM)
 	@$(PY) bench/hil_report.py $(BUILD)/bench/hil $(BUILD)/bench/hil.json
 
 BENCH_STEPS += bench-hil
+
+# The HIL tests: one pytest inside one sandbox (starting Python there costs
+# seconds): tests/hil (scenarios shared with SIL, bit-identity with SIL,
+# raw frames from can-utils, floods, live tools, NVM across restarts) and
+# the vcan tests of tests/sim (canfdi-sim's lockstep protocol).
+# CANFDI_HIL_REQUIRED=1: a missing vcan0 fails instead of skipping.
+# The SIL twins of the scenarios tests/hil/test_scenarios.py compares frame
+# by frame (SHARED there) are made here on the host: canfdi-sil is an ASan
+# build, which cannot run in the sandbox.
+HIL_SHARED := tps1_open dcm_ra_up bridge_a_dead tps_both_lost
+HIL_SIL_LOGS := $(HIL_SHARED:%=$(BUILD)/hil/test/%-sil.log)
+$(BUILD)/hil/test/%-sil.log: tests/sil/scenarios/%.scn $(BUILD)/bin/canfdi-sil
+	@mkdir -p $(@D)
+	@$(BUILD)/bin/canfdi-sil -q -s $< -l $@ >/dev/null
+
+.PHONY: hil-test hil
+hil-test: deps $(HIL_BINS) $(HIL_SIL_LOGS)
+	@$(VCAN_RUN) --timeout 1800 env CANFDI_HIL_REQUIRED=1 CANFDI_SIM=$(CURDIR)/$(BUILD)/bin/canfdi-sim \
+	  CANFDI_SIM_HIL=$(CURDIR)/$(HIL_SIM) PYTHONDONTWRITEBYTECODE=1 \
+	  $(PY) -m pytest -p no:cacheprovider tests/hil tests/sim/test_canfdi_sim_can.py -q
+
+TEST_STEPS += hil-test
+
+# The HIL demo: canfdi-ecu and canfdi-sim in lockstep on vcan0, the demo's
+# fault sequence (tests/sil/scenarios/demo.scn), the timeline printed live by
+# canfdi-scenario as the frames arrive, the bus recorded to
+# $(BUILD)/demo/canfdi-hil-demo.log.
+HIL_DEMO_LOG := $(BUILD)/demo/canfdi-hil-demo.log
+hil: deps $(HIL_BINS)
+	@mkdir -p $(BUILD)/demo
+	@echo "hil: canfdi-ecu + canfdi-sim on vcan0 (lockstep), $(DEMO_SCN); sandbox: tools/vcan-run"
+	@$(VCAN_RUN) --timeout 900 $(CURDIR)/$(VENV)/bin/canfdi-scenario --live --log $(HIL_DEMO_LOG) \
+	  --json $(BUILD)/demo/canfdi-hil-demo.json $(DEMO_SCN)
+	@echo "hil: bus log $(HIL_DEMO_LOG) (candump -L; cantools decode dbc/canfdi.dbc < it)"

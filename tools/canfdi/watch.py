@@ -20,6 +20,7 @@ from typing import Iterator
 import can
 
 from .busargs import BusOpenError, add_bus_args, open_bus
+from .hil import raise_rcvbuf
 from .catalogue import dtc_by_code
 from .logio import ReadStats, read_log
 from .timeline import Event, Timeline
@@ -183,6 +184,9 @@ def main(argv: list[str] | None = None) -> int:
             source = str(a.log)
         else:
             bus = open_bus(a)
+            # a lockstep bench outruns a Python reader (see canfdi.hil):
+            # a deep kernel queue instead of lost frames
+            raise_rcvbuf(bus)
             window = checks.window_us()
             timeout = a.timeout if a.timeout is not None else (
                 None if window is None else 10 * window * 1e-6 + 10.0)
