@@ -187,6 +187,10 @@ static void summary(const canfdi_sim_scn_t *scn, const char *path)
     printf("  fault %s %s from %.6f s, magnitude %g\n", canfdi_fault_table[f->id].name,
            canfdi_sim_fault_mode_name(f->mode), (double)f->t_start_us * 1e-6, f->magnitude);
   }
+  if (scn->n_actions > 0U) {
+    printf("  %zu ECU action(s) (cycle/clear/power_cycle): performed by the SIL rig only, "
+           "ignored here\n", scn->n_actions);
+  }
 }
 
 /* Options of the SocketCAN mode. */

@@ -327,12 +327,85 @@ static bool dtc_known(const char *code)
   return found;
 }
 
+static const char *const status_bit_names[8] = {CANFDI_SIM_SCN_STATUS_BITS};
+
+static const char *const ff_names[CANFDI_SIM_N_FF] = {"time",     "dcm_speed", "dcm_ia",  "dcm_ua",
+                                                      "thr_angle", "dcm_supply", "deg_dcm", "deg_thr"};
+
+const char *canfdi_sim_ff_name(unsigned signal)
+{
+  return (signal < CANFDI_SIM_N_FF) ? ff_names[signal] : "?";
+}
+
+const char *canfdi_sim_status_bit_name(unsigned bit)
+{
+  return (bit < 8U) ? status_bit_names[bit] : "?";
+}
+
+/* "TF=1,PDTC=0,..." (any subset, each name once) or "0xNN" (all eight). */
+static int parse_status_bits(parser_t *ps, const char *text, uint8_t *mask, uint8_t *value)
+{
+  int rc = CANFDI_OK;
+  *mask = 0U;
+  *value = 0U;
+  if ((text[0] == '0') && ((text[1] == 'x') || (text[1] == 'X'))) {
+    char *end = NULL;
+    const unsigned long v = strtoul(text + 2, &end, 16);
+    const size_t len = strlen(text);
+    bool hex = (len >= 3U) && (len <= 4U);
+    size_t i;
+    for (i = 2U; i < len; i++) {
+      hex = hex && (strchr("0123456789abcdefABCDEF", text[i]) != NULL);
+    }
+    if (!hex || (*end != '\0') || (v > 0xFFUL)) {
+      rc = fail(ps, "status byte '%s' must be 0x00..0xFF", text);
+    } else {
+      *mask = 0xFFU;
+      *value = (uint8_t)v;
+    }
+  } else {
+    const char *p = text;
+    while ((rc == CANFDI_OK) && (*p != '\0')) {
+      const char *eq = strchr(p, '=');
+      const char *comma = strchr(p, ',');
+      const size_t len = (eq != NULL) ? (size_t)(eq - p) : 0U;
+      unsigned b;
+      unsigned k = 8U;
+      for (b = 0U; b < 8U; b++) {
+        if ((len > 0U) && (strlen(status_bit_names[b]) == len) &&
+            (strncmp(status_bit_names[b], p, len) == 0)) {
+          k = b;
+        }
+      }
+      if ((eq == NULL) || ((comma != NULL) && (comma < eq)) || (k == 8U)) {
+        rc = fail(ps, "status bits '%s': expected NAME=0|1[,NAME=0|1...] with NAME one of "
+                      "TF, TFTOC, PDTC, CDTC, TNCSLC, TFSLC, TNCTOC, WIR (or a byte 0xNN)", text);
+      } else if (((eq[1] != '0') && (eq[1] != '1')) || ((eq[2] != ',') && (eq[2] != '\0')) ||
+                 ((eq[2] == ',') && (eq[3] == '\0'))) {
+        rc = fail(ps, "status bits '%s': %s must be 0 or 1", text, status_bit_names[k]);
+      } else if ((*mask & (1U << k)) != 0U) {
+        rc = fail(ps, "status bits '%s': %s named twice", text, status_bit_names[k]);
+      } else {
+        *mask = (uint8_t)(*mask | (1U << k));
+        if (eq[1] == '1') {
+          *value = (uint8_t)(*value | (1U << k));
+        }
+        p = (eq[2] == ',') ? (eq + 3) : (eq + 2);
+      }
+    }
+  }
+  return rc;
+}
+
 static int do_expect(parser_t *ps, char **tok, size_t n)
 {
   canfdi_sim_scn_t *scn = ps->scn;
   canfdi_sim_expect_t e;
-  int rc = want_args(ps, n, 3U, 5U, "expect <t> dtc <code> [pending|confirmed] | expect <t> no_dtc"
-                                    " | expect <t> degradation <dcm|thr> <state>");
+  int rc = want_args(ps, n, 3U, 7U, "expect <t> dtc <code> [pending|confirmed] | expect <t> no_dtc"
+                                    " | expect <t> degradation <dcm|thr> <state>"
+                                    " | expect <t> dtc_status <code> <bits>"
+                                    " | expect <t> occurrence <code> <n>"
+                                    " | expect <t> freeze <code> <signal> <min> <max>");
   memset(&e, 0, sizeof e);
   if (rc == CANFDI_OK) {
     rc = arg_num(ps, tok, 1U, "expect time", 0.0, CANFDI_SIM_SCN_MAX_DURATION_S, &e.t_s);
@@ -359,8 +432,58 @@ static int do_expect(parser_t *ps, char **tok, size_t n)
           (strcmp(tok[4], "degraded") != 0) && (strcmp(tok[4], "fail_safe") != 0)) {
         rc = fail(ps, "degradation '%s' must be normal, degraded or fail_safe", tok[4]);
       }
+    } else if (strcmp(k, "dtc_status") == 0) {
+      rc = want_args(ps, n, 5U, 5U, "expect <t> dtc_status <code> <NAME=0|1,...>");
+      if ((rc == CANFDI_OK) && !dtc_known(tok[3])) {
+        rc = fail(ps, "unknown trouble code '%s' (see dbc/dtcs.csv)", tok[3]);
+      }
+      if ((rc == CANFDI_OK) && (strlen(tok[4]) >= sizeof e.arg2)) {
+        rc = fail(ps, "status bits '%s' too long", tok[4]);
+      }
+      if (rc == CANFDI_OK) {
+        rc = parse_status_bits(ps, tok[4], &e.st_mask, &e.st_value);
+      }
+    } else if (strcmp(k, "occurrence") == 0) {
+      uint64_t v = 0U;
+      rc = want_args(ps, n, 5U, 5U, "expect <t> occurrence <code> <n>");
+      if ((rc == CANFDI_OK) && !dtc_known(tok[3])) {
+        rc = fail(ps, "unknown trouble code '%s' (see dbc/dtcs.csv)", tok[3]);
+      }
+      if ((rc == CANFDI_OK) && (!u64(tok[4], &v) || (v > 255U))) {
+        rc = fail(ps, "occurrence '%s' must be an integer 0..255", tok[4]);
+      }
+      e.lo = (double)v;
+      e.hi = (double)v;
+    } else if (strcmp(k, "freeze") == 0) {
+      rc = want_args(ps, n, 7U, 7U, "expect <t> freeze <code> <signal> <min> <max>");
+      if ((rc == CANFDI_OK) && !dtc_known(tok[3])) {
+        rc = fail(ps, "unknown trouble code '%s' (see dbc/dtcs.csv)", tok[3]);
+      }
+      if (rc == CANFDI_OK) {
+        unsigned i;
+        e.ff_signal = (uint8_t)CANFDI_SIM_N_FF;
+        for (i = 0U; i < CANFDI_SIM_N_FF; i++) {
+          if (strcmp(tok[4], ff_names[i]) == 0) {
+            e.ff_signal = (uint8_t)i;
+          }
+        }
+        if (e.ff_signal == (uint8_t)CANFDI_SIM_N_FF) {
+          rc = fail(ps, "unknown freeze-frame signal '%s' (time, dcm_speed, dcm_ia, dcm_ua, "
+                        "thr_angle, dcm_supply, deg_dcm, deg_thr)", tok[4]);
+        }
+      }
+      if (rc == CANFDI_OK) {
+        rc = arg_num(ps, tok, 5U, "freeze min", -1e9, 1e9, &e.lo);
+      }
+      if (rc == CANFDI_OK) {
+        rc = arg_num(ps, tok, 6U, "freeze max", -1e9, 1e9, &e.hi);
+      }
+      if ((rc == CANFDI_OK) && (e.hi < e.lo)) {
+        rc = fail(ps, "freeze max (%g) below min (%g)", e.hi, e.lo);
+      }
     } else {
-      rc = fail(ps, "unknown expectation '%s' (dtc, no_dtc, degradation)", k);
+      rc = fail(ps, "unknown expectation '%s' (dtc, no_dtc, degradation, dtc_status, occurrence, "
+                    "freeze)", k);
     }
   }
   if ((rc == CANFDI_OK) && (scn->n_expects >= CANFDI_SIM_SCN_MAX_EXPECT)) {
@@ -375,6 +498,46 @@ static int do_expect(parser_t *ps, char **tok, size_t n)
     e.line = ps->line;
     scn->expects[scn->n_expects] = e;
     scn->n_expects++;
+  }
+  return rc;
+}
+
+/* cycle <t> | clear <t> [<code>|all] | power_cycle <t> */
+static int do_action(parser_t *ps, char **tok, size_t n, uint8_t kind)
+{
+  canfdi_sim_scn_t *scn = ps->scn;
+  canfdi_sim_action_t a;
+  double t = 0.0;
+  int rc;
+  memset(&a, 0, sizeof a);
+  if (kind == (uint8_t)CANFDI_SIM_ACT_CLEAR) {
+    rc = want_args(ps, n, 2U, 3U, "clear <t> [<code>|all]");
+  } else {
+    rc = want_args(ps, n, 2U, 2U, (kind == (uint8_t)CANFDI_SIM_ACT_CYCLE) ? "cycle <t>" : "power_cycle <t>");
+  }
+  if (rc == CANFDI_OK) {
+    rc = arg_num(ps, tok, 1U, "action time", 0.0, CANFDI_SIM_SCN_MAX_DURATION_S, &t);
+  }
+  if ((rc == CANFDI_OK) && (n == 3U) && (strcmp(tok[2], "all") != 0)) {
+    if (!dtc_known(tok[2])) {
+      rc = fail(ps, "unknown trouble code '%s' (see dbc/dtcs.csv, or all)", tok[2]);
+    } else {
+      (void)snprintf(a.code, sizeof a.code, "%s", tok[2]);
+    }
+  }
+  if (rc == CANFDI_OK) {
+    a.t_us = (int64_t)llround(t * 1e6);
+    a.kind = kind;
+    a.line = ps->line;
+    if ((scn->n_actions > 0U) && (a.t_us < scn->actions[scn->n_actions - 1U].t_us)) {
+      rc = fail(ps, "%s at %g s is before the previous cycle/clear/power_cycle line (write them in "
+                    "time order)", tok[0], t);
+    } else if (scn->n_actions >= CANFDI_SIM_SCN_MAX_ACTIONS) {
+      rc = fail(ps, "too many cycle/clear/power_cycle lines (at most %u)", CANFDI_SIM_SCN_MAX_ACTIONS);
+    } else {
+      scn->actions[scn->n_actions] = a;
+      scn->n_actions++;
+    }
   }
   return rc;
 }
@@ -525,9 +688,15 @@ static int do_line(parser_t *ps, char *line)
     rc = do_fault(ps, tok, n);
   } else if (strcmp(d, "expect") == 0) {
     rc = do_expect(ps, tok, n);
+  } else if (strcmp(d, "cycle") == 0) {
+    rc = do_action(ps, tok, n, (uint8_t)CANFDI_SIM_ACT_CYCLE);
+  } else if (strcmp(d, "clear") == 0) {
+    rc = do_action(ps, tok, n, (uint8_t)CANFDI_SIM_ACT_CLEAR);
+  } else if (strcmp(d, "power_cycle") == 0) {
+    rc = do_action(ps, tok, n, (uint8_t)CANFDI_SIM_ACT_POWER_CYCLE);
   } else {
     rc = fail(ps, "unknown directive '%s' (duration, seed, noise, init, param, speed, angle, "
-                  "load, fault, expect)", d);
+                  "load, fault, expect, cycle, clear, power_cycle)", d);
   }
   return rc;
 }
@@ -547,6 +716,7 @@ static void scn_defaults(canfdi_sim_scn_t *scn)
   canfdi_sim_profile_init(&scn->load, -LOAD_LIM_NM, LOAD_LIM_NM);
   scn->n_faults = 0U;
   scn->n_expects = 0U;
+  scn->n_actions = 0U;
 }
 
 static void parser_init(parser_t *ps, canfdi_sim_scn_t *scn, const char *name,
@@ -578,6 +748,12 @@ static int finish(parser_t *ps)
       ps->line = ps->fault_line[i];
       rc = fail(ps, "fault starts at or after the end of the scenario (duration %g s)",
                 scn->duration_s);
+    }
+  }
+  for (i = 0U; (rc == CANFDI_OK) && (i < scn->n_actions); i++) {
+    if ((double)scn->actions[i].t_us * 1e-6 >= scn->duration_s) {
+      ps->line = scn->actions[i].line;
+      rc = fail(ps, "action at or after the end of the scenario (duration %g s)", scn->duration_s);
     }
   }
   for (i = 0U; (rc == CANFDI_OK) && (i < scn->n_expects); i++) {

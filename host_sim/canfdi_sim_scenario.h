@@ -17,17 +17,24 @@
  *   speed|angle|load sine <t0> <t1> <amplitude> <freq_hz>
  *   load fan <k_Nms>                          speed-proportional load
  *   fault <t_start> <name> <mode> <magnitude> [<ramp_s> | <period_s> <duty>]
+ *   cycle <t>                                 ECU: operation cycle ends, a new one starts
+ *   clear <t> [<code>|all]                    ECU: ClearDiagnosticInformation
+ *   power_cycle <t>                           ECU: DTC memory -> NVM, re-init, load
  *   expect <t> dtc <code> [pending|confirmed] | no_dtc |
- *          degradation <dcm|thr> <normal|degraded|fail_safe>
- * `expect` lines are parsed, validated and kept for the scenario runner of
- * a later issue; nothing evaluates them yet.
+ *          degradation <dcm|thr> <normal|degraded|fail_safe> |
+ *          dtc_status <code> <bits> | occurrence <code> <n> |
+ *          freeze <code> <signal> <min> <max>
+ * `expect` lines are parsed, validated and kept; the SIL rig (tests/sil)
+ * and the HIL runner (tools/canfdi) evaluate them. The ECU actions (cycle,
+ * clear, power_cycle) are kept in time order in `actions`; only the SIL
+ * rig performs them.
  * Errors: every malformed, unknown, duplicate or out-of-range item is
  * rejected with "<file>:<line>: <message>" in err->msg; parsing stops at the
  * first error. Lines longer than CANFDI_SIM_SCN_LINE_MAX are errors.
  *
- * Cost: parsing is O(file size). Memory: sizeof(canfdi_sim_scn_t) ~ 9 kB
+ * Cost: parsing is O(file size). Memory: sizeof(canfdi_sim_scn_t) ~ 17 kB
  * (three profiles, CANFDI_SIM_MAX_FAULTS faults, CANFDI_SIM_SCN_MAX_EXPECT
- * expectations), caller-owned; the file is read line by line into a stack
+ * expectations, CANFDI_SIM_SCN_MAX_ACTIONS actions), caller-owned; the file is read line by line into a stack
  * buffer. No heap.
  */
 #ifndef CANFDI_SIM_SCENARIO_H
@@ -41,7 +48,8 @@
 #include "canfdi_sim_profile.h"
 
 #define CANFDI_SIM_SCN_LINE_MAX 256U
-#define CANFDI_SIM_SCN_MAX_EXPECT 32U
+#define CANFDI_SIM_SCN_MAX_EXPECT 64U
+#define CANFDI_SIM_SCN_MAX_ACTIONS 64U
 #define CANFDI_SIM_SCN_MAX_DURATION_S 1e5
 
 #define CANFDI_SIM_INIT_DCM_SPEED 0U
@@ -55,13 +63,45 @@ typedef struct {
   unsigned line;    /* 0 if not tied to a line (e.g. cannot open) */
 } canfdi_sim_scn_err_t;
 
+/* `expect dtc_status` bit names, in status-bit order (bit 0 first). */
+#define CANFDI_SIM_SCN_STATUS_BITS "TF", "TFTOC", "PDTC", "CDTC", "TNCSLC", "TFSLC", "TNCTOC", "WIR"
+
+/* `expect freeze` signals (canfdi_dtc_ff_t fields, in the units named). */
+#define CANFDI_SIM_FF_TIME 0U       /* time_ms, s */
+#define CANFDI_SIM_FF_DCM_SPEED 1U  /* omega, rad/s */
+#define CANFDI_SIM_FF_DCM_IA 2U     /* ia, A */
+#define CANFDI_SIM_FF_DCM_UA 3U     /* ua, V */
+#define CANFDI_SIM_FF_THR_ANGLE 4U  /* thr_angle, deg (the ECU's voted angle) */
+#define CANFDI_SIM_FF_DCM_SUPPLY 5U /* supply, V */
+#define CANFDI_SIM_FF_DEG_DCM 6U    /* deg_dcm, 0 normal .. 3 fail_silent */
+#define CANFDI_SIM_FF_DEG_THR 7U    /* deg_thr */
+#define CANFDI_SIM_N_FF 8U
+
 typedef struct {
   double t_s;
-  char kind[16];    /* dtc | no_dtc | degradation */
+  char kind[16];    /* dtc | no_dtc | degradation | dtc_status | occurrence | freeze */
   char arg1[16];    /* code or subsystem */
-  char arg2[16];    /* status or state ("" if absent) */
+  char arg2[64];    /* dtc: status; degradation: state; dtc_status: the bits as
+                     * written; freeze: the signal name ("" if absent) */
+  uint8_t st_mask;  /* dtc_status: the bits named */
+  uint8_t st_value; /* dtc_status: their expected values (within st_mask) */
+  uint8_t ff_signal;/* freeze: CANFDI_SIM_FF_* */
+  double lo;        /* occurrence: n; freeze: min */
+  double hi;        /* occurrence: n; freeze: max */
   unsigned line;
 } canfdi_sim_expect_t;
+
+#define CANFDI_SIM_ACT_CYCLE 0U       /* canfdi_dtc_cycle_end + canfdi_dtc_cycle_start */
+#define CANFDI_SIM_ACT_CLEAR 1U       /* canfdi_dtc_clear(code or all) */
+#define CANFDI_SIM_ACT_POWER_CYCLE 2U /* store to NVM, re-init the app, load */
+
+/* An action on the ECU side (SIL rig only), before its step at t_us. */
+typedef struct {
+  int64_t t_us;
+  uint8_t kind;     /* CANFDI_SIM_ACT_* */
+  char code[8];     /* clear: trouble code, "" = all */
+  unsigned line;
+} canfdi_sim_action_t;
 
 typedef struct {
   double duration_s;
@@ -75,7 +115,14 @@ typedef struct {
   size_t n_faults;
   canfdi_sim_expect_t expects[CANFDI_SIM_SCN_MAX_EXPECT];
   size_t n_expects;
+  canfdi_sim_action_t actions[CANFDI_SIM_SCN_MAX_ACTIONS]; /* non-decreasing t_us */
+  size_t n_actions;
 } canfdi_sim_scn_t;
+
+/* Name of a CANFDI_SIM_FF_* signal; "?" if out of range. */
+const char *canfdi_sim_ff_name(unsigned signal);
+/* Name of a status bit 0..7 (TF .. WIR); "?" if out of range. */
+const char *canfdi_sim_status_bit_name(unsigned bit);
 
 /* Parses a NUL-terminated text; `name` is used in messages. Returns
  * CANFDI_OK or -CANFDI_EINVAL with err filled. */

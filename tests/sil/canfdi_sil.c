@@ -20,7 +20,11 @@
  * Reads the scenario format of host_sim/SCENARIO.md and evaluates its
  * `expect` lines; prints a technician's timeline and one PASS/FAIL line per
  * expectation, plus an implicit check that no trouble code appears that no
- * `expect ... dtc` line names. Exit status 0 all passed, 1 a check failed,
+ * `expect ... dtc` line names. The ECU-side lines `cycle`, `clear` and
+ * `power_cycle` act on the firmware's DTC memory before its step at their
+ * time; `dtc_status`/`occurrence` are judged on the last EcuDtc frame of the
+ * code at or before t (never reported: the cleared state 0x50), `freeze` on
+ * the ECU's memory (SIL only). Exit status 0 all passed, 1 a check failed,
  * 2 usage / scenario error.
  */
 /* clock_gettime: the pre-included assert.h fixes the feature macros first,
@@ -38,6 +42,7 @@
 
 #include "app/canfdi_app.h"
 #include "canfdi_sil_msg.h"
+#include "diag/canfdi_nvm.h"
 #include "canfdi_sim.h"
 #include "canfdi_sim_frames.h"
 #include "canfdi_sim_rig.h"
@@ -59,6 +64,9 @@ typedef struct {
 typedef struct {
   uint32_t dtc;
   uint8_t status;       /* last status seen */
+  uint8_t occurrence;   /* DtcOccurrence of the last frame */
+  int64_t last_us;      /* time of the last EcuDtc frame of this code, -1 none */
+  int64_t since_us;     /* first frame with the current status and occurrence */
   int64_t first_tf_us;  /* first testFailed, -1 never */
   int64_t first_pd_us;  /* first pendingDTC */
   int64_t first_cf_us;  /* first confirmedDTC */
@@ -140,6 +148,9 @@ static dtc_seen_t *seen_get(uint32_t dtc)
     dtc_seen_t *s = &seen[n_seen++];
     s->dtc = dtc;
     s->status = 0U;
+    s->occurrence = 0U;
+    s->last_us = -1;
+    s->since_us = -1;
     s->first_tf_us = -1;
     s->first_pd_us = -1;
     s->first_cf_us = -1;
@@ -157,6 +168,76 @@ static uint32_t code_to_dtc(const char *code)
     }
   }
   return 0U;
+}
+
+
+/* ------------------------------------------------ ECU-side actions (SIL) */
+
+/* The ECU's NVM in RAM: two banks behind the canfdi_nvm port, flash
+ * semantics (erase to 0xFF; programming only clears bits), so a power_cycle
+ * goes through the same store/load path as canfdi-ecu --nvm. */
+#define SIL_NVM_BANK_BYTES 1024U
+static uint8_t sil_nvm_mem[2][SIL_NVM_BANK_BYTES];
+
+static int32_t sil_nvm_read(void *ctx, uint8_t bank, uint32_t off, uint8_t *buf, uint32_t len)
+{
+  (void)ctx;
+  memcpy(buf, &sil_nvm_mem[bank][off], len);
+  return CANFDI_OK;
+}
+
+static int32_t sil_nvm_write(void *ctx, uint8_t bank, uint32_t off, const uint8_t *buf, uint32_t len)
+{
+  uint32_t i;
+  (void)ctx;
+  for (i = 0U; i < len; i++) {
+    sil_nvm_mem[bank][off + i] &= buf[i];
+  }
+  return CANFDI_OK;
+}
+
+static int32_t sil_nvm_erase(void *ctx, uint8_t bank)
+{
+  (void)ctx;
+  memset(sil_nvm_mem[bank], 0xFF, SIL_NVM_BANK_BYTES);
+  return CANFDI_OK;
+}
+
+static const canfdi_nvm_port_t sil_nvm_port = {NULL, sil_nvm_read, sil_nvm_write, sil_nvm_erase,
+                                               SIL_NVM_BANK_BYTES, 8U};
+static canfdi_nvm_t sil_nvm;
+
+/* "TF=1,PDTC=0" for the bits in mask, values from v (bit order). */
+static void bits_text(uint8_t mask, uint8_t v, char *out, size_t cap)
+{
+  unsigned b;
+  size_t n = 0U;
+  out[0] = '\0';
+  for (b = 0U; b < 8U; b++) {
+    if ((((unsigned)mask >> b) & 1U) != 0U) {
+      const int w = snprintf(out + n, cap - n, "%s%s=%u", (n > 0U) ? "," : "",
+                             canfdi_sim_status_bit_name(b), ((unsigned)v >> b) & 1U);
+      n = ((w > 0) && ((size_t)w < (cap - n))) ? (n + (size_t)w) : (cap - 1U);
+    }
+  }
+}
+
+/* Freeze-frame signal in the scenario's unit (CANFDI_SIM_FF_*). */
+static double ff_value(const canfdi_dtc_ff_t *ff, unsigned signal)
+{
+  static const double q16 = 1.0 / 65536.0;
+  double v = 0.0;
+  switch (signal) {
+  case CANFDI_SIM_FF_TIME: v = (double)ff->time_ms * 1e-3; break;
+  case CANFDI_SIM_FF_DCM_SPEED: v = (double)ff->omega_q16 * q16; break;
+  case CANFDI_SIM_FF_DCM_IA: v = (double)ff->ia_q16 * q16; break;
+  case CANFDI_SIM_FF_DCM_UA: v = (double)ff->ua_q16 * q16; break;
+  case CANFDI_SIM_FF_THR_ANGLE: v = (double)ff->thr_angle_q16 * q16 * (180.0 / 3.14159265358979323846); break;
+  case CANFDI_SIM_FF_DCM_SUPPLY: v = (double)ff->supply_q16 * q16; break;
+  case CANFDI_SIM_FF_DEG_DCM: v = (double)ff->deg_dcm; break;
+  default: v = (double)ff->deg_thr; break;
+  }
+  return v;
 }
 
 static void usage(FILE *out)
@@ -224,6 +305,125 @@ static bool ecu_filter_passes(uint32_t id)
          (id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) || (id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID);
 }
 
+/* One ECU-side action of the scenario (cycle, clear, power_cycle) on the
+ * firmware's own state, before its step at now_us. Returns 0, or -1 with
+ * msg filled when the firmware refused it (a rig failure). */
+static int apply_action(const canfdi_sim_action_t *a, const canfdi_app_cal_t *cal, uint32_t now_us,
+                        bool quiet, char *msg, size_t cap)
+{
+  canfdi_dtc_t *dtc = canfdi_app_dtc(&app);
+  int rc = 0;
+  msg[0] = '\0';
+  if (a->kind == (uint8_t)CANFDI_SIM_ACT_CYCLE) {
+    if ((canfdi_dtc_cycle_end(dtc) != CANFDI_OK) || (canfdi_dtc_cycle_start(dtc) != CANFDI_OK)) {
+      (void)snprintf(msg, cap, "cycle at %.3f s: the DTC memory refused cycle_end/cycle_start",
+                     (double)a->t_us * 1e-6);
+      rc = -1;
+    } else if (!quiet) {
+      printf("  %8.3f  ecu: operation cycle ends, a new one starts (ignition off/on)\n",
+             (double)now_us * 1e-6);
+    }
+  } else if (a->kind == (uint8_t)CANFDI_SIM_ACT_CLEAR) {
+    const uint32_t group = (a->code[0] != '\0') ? code_to_dtc(a->code) : CANFDI_DTC_GROUP_ALL;
+    if (canfdi_dtc_clear(dtc, group) != CANFDI_OK) {
+      (void)snprintf(msg, cap, "clear %s at %.3f s: refused by the DTC memory",
+                     (a->code[0] != '\0') ? a->code : "all", (double)a->t_us * 1e-6);
+      rc = -1;
+    } else if (!quiet) {
+      printf("  %8.3f  ecu: ClearDiagnosticInformation %s\n", (double)now_us * 1e-6,
+             (a->code[0] != '\0') ? a->code : "(all groups)");
+    }
+  } else {
+    /* power_cycle: shutdown as canfdi-ecu --nvm does it (end the cycle,
+     * store), a cold start of the whole application, then the boot
+     * sequence of canfdi_dtc.h (load into a memory without an active
+     * cycle, start one). */
+    static uint8_t img[CANFDI_DTC_IMAGE_MAX_BYTES];
+    int32_t n;
+    (void)canfdi_dtc_cycle_end(dtc);
+    n = canfdi_dtc_serialize(dtc, img, (uint32_t)sizeof img);
+    if ((n < 0) || (canfdi_nvm_store(&sil_nvm, img, (uint32_t)n) != CANFDI_OK)) {
+      (void)snprintf(msg, cap, "power_cycle at %.3f s: storing the DTC memory failed",
+                     (double)a->t_us * 1e-6);
+      rc = -1;
+    } else if (canfdi_app_init(&app, cal, now_us) != CANFDI_OK) {
+      (void)snprintf(msg, cap, "power_cycle at %.3f s: the firmware refused its calibration",
+                     (double)a->t_us * 1e-6);
+      rc = -1;
+    } else {
+      memset(img, 0, sizeof img);
+      n = canfdi_nvm_load(&sil_nvm, img, (uint32_t)sizeof img);
+      if ((n < 0) || (canfdi_dtc_cycle_end(dtc) != CANFDI_OK) ||
+          (canfdi_dtc_deserialize(dtc, img, (uint32_t)n) != CANFDI_OK) ||
+          (canfdi_dtc_cycle_start(dtc) != CANFDI_OK)) {
+        (void)snprintf(msg, cap, "power_cycle at %.3f s: loading the DTC memory failed (%d)",
+                       (double)a->t_us * 1e-6, (int)n);
+        rc = -1;
+      } else if (!quiet) {
+        printf("  %8.3f  ecu: power cycle (DTC memory stored to NVM, %d bytes, application "
+               "restarted, memory loaded)\n", (double)now_us * 1e-6, (int)n);
+      }
+    }
+  }
+  return rc;
+}
+
+/* dtc_status, occurrence, freeze: judged once the run has passed t (every
+ * frame at or before t seen). dtc_status/occurrence from the last EcuDtc
+ * frame of the code; freeze from the ECU's DTC memory (SIL only). */
+static bool is_state_expect(const canfdi_sim_expect_t *e)
+{
+  return (strcmp(e->kind, "dtc_status") == 0) || (strcmp(e->kind, "occurrence") == 0) ||
+         (strcmp(e->kind, "freeze") == 0);
+}
+
+static int judge_state(const canfdi_sim_expect_t *e, char *msg, size_t cap)
+{
+  const uint32_t dtc = code_to_dtc(e->arg1);
+  const dtc_seen_t *s = NULL;
+  char src[48];
+  size_t q;
+  int ok = 0;
+  for (q = 0U; q < n_seen; q++) {
+    if ((seen[q].dtc == dtc) && (seen[q].last_us >= 0)) {
+      s = &seen[q];
+    }
+  }
+  if (s != NULL) {
+    (void)snprintf(src, sizeof src, "reported since %.3f s", (double)s->since_us * 1e-6);
+  } else {
+    (void)snprintf(src, sizeof src, "never reported: cleared state assumed");
+  }
+  if (strcmp(e->kind, "dtc_status") == 0) {
+    const uint8_t st = (s != NULL) ? s->status : (uint8_t)CANFDI_DTC_STATUS_CLEARED;
+    char got[64];
+    char want[64];
+    bits_text(e->st_mask, st, got, sizeof got);
+    bits_text(e->st_mask, e->st_value, want, sizeof want);
+    ok = ((st & e->st_mask) == e->st_value) ? 1 : 0;
+    (void)snprintf(msg, cap, "dtc_status %s at %.3f s: %s (expected %s) [0x%02X %s]", e->arg1, e->t_s,
+                   got, want, (unsigned)st, src);
+  } else if (strcmp(e->kind, "occurrence") == 0) {
+    const unsigned occ = (s != NULL) ? s->occurrence : 0U;
+    ok = ((unsigned)llround(e->lo) == occ) ? 1 : 0;
+    (void)snprintf(msg, cap, "occurrence %s at %.3f s: %u (expected %.0f) [%s]", e->arg1, e->t_s, occ,
+                   e->lo, src);
+  } else {
+    canfdi_dtc_record_t rec;
+    const int32_t rc = canfdi_dtc_read_record(canfdi_app_dtc(&app), dtc, &rec);
+    if ((rc == CANFDI_OK) && rec.ff_valid) {
+      const double v = ff_value(&rec.ff, e->ff_signal);
+      ok = ((v >= e->lo) && (v <= e->hi)) ? 1 : 0;
+      (void)snprintf(msg, cap, "freeze %s %s at %.3f s: %.6g (expected %g..%g; frame of %.3f s)", e->arg1,
+                     e->arg2, e->t_s, v, e->lo, e->hi, (double)rec.ff.time_ms * 1e-3);
+    } else {
+      (void)snprintf(msg, cap, "freeze %s %s at %.3f s: no freeze frame (no event-memory entry)", e->arg1,
+                     e->arg2, e->t_s);
+    }
+  }
+  return ok;
+}
+
 int main(int argc, char **argv)
 {
   const char *scn_path = NULL;
@@ -252,7 +452,8 @@ int main(int argc, char **argv)
   int failures = 0;
   bool expect_done[CANFDI_SIM_SCN_MAX_EXPECT];
   int expect_ok[CANFDI_SIM_SCN_MAX_EXPECT];
-  char expect_msg[CANFDI_SIM_SCN_MAX_EXPECT][160];
+  char expect_msg[CANFDI_SIM_SCN_MAX_EXPECT][200];
+  size_t next_action = 0U;
   unsigned last_deg[2] = {0U, 0U};
   unsigned last_bridge = 1U;
   bool last_thr_en = true;
@@ -362,6 +563,11 @@ int main(int argc, char **argv)
     expect_msg[i][0] = '\0';
   }
   memset(&ecu, 0, sizeof ecu);
+  memset(sil_nvm_mem, 0xFF, sizeof sil_nvm_mem);
+  if (canfdi_nvm_init(&sil_nvm, &sil_nvm_port) != CANFDI_OK) {
+    fprintf(stderr, "canfdi-sil: NVM port refused\n");
+    return EXIT_USAGE;
+  }
   (void)canfdi_sim_rig_init(&rig, &scn, &sim, (uint8_t)CANFDI_SIM_MODE_LOCKSTEP);
   n_steps = (uint64_t)llround(scn.duration_s * 1000.0);
   if (!quiet) {
@@ -382,6 +588,23 @@ int main(int argc, char **argv)
     size_t npf;
     int32_t nef;
     size_t j;
+    /* expectations on the DTC state whose time has passed (all frames at or
+     * before it seen), then the ECU-side actions due at t_k */
+    for (i = 0U; i < scn.n_expects; i++) {
+      const canfdi_sim_expect_t *e = &scn.expects[i];
+      if (!expect_done[i] && is_state_expect(e) && ((int64_t)llround(e->t_s * 1e6) < t_us)) {
+        expect_ok[i] = judge_state(e, expect_msg[i], sizeof expect_msg[i]);
+        expect_done[i] = true;
+      }
+    }
+    while ((next_action < scn.n_actions) && (scn.actions[next_action].t_us <= t_us)) {
+      char amsg[160];
+      if (apply_action(&scn.actions[next_action], &cal, now_us, quiet, amsg, sizeof amsg) != 0) {
+        printf("FAIL  %s:%u: %s\n", scn_path, scn.actions[next_action].line, amsg);
+        failures++;
+      }
+      next_action++;
+    }
     /* the vehicle's setpoints (every 10 ms) and the plant's frames */
     npf = canfdi_sim_rig_begin(&rig, pf);
     for (j = 0U; j < npf; j++) {
@@ -468,7 +691,12 @@ int main(int argc, char **argv)
                                     ((st & 0x01U) ? "testFailed" : "passed"),
                      dtc_desc(d.dtc_code));
             }
+            if ((s->last_us < 0) || (st != s->status) || (d.dtc_occurrence != s->occurrence)) {
+              s->since_us = t_us;
+            }
             s->status = st;
+            s->occurrence = (uint8_t)d.dtc_occurrence;
+            s->last_us = t_us;
           }
         }
       } else if (f->id == CANFDI_SIL_MSG_ECU_RESIDUAL_DCM_FRAME_ID) {
@@ -532,6 +760,12 @@ int main(int argc, char **argv)
   /* the DTC expectations and the implicit "nothing else" */
   if (!quiet) {
     printf("\n");
+  }
+  for (i = 0U; i < scn.n_expects; i++) {
+    if (!expect_done[i] && is_state_expect(&scn.expects[i])) {
+      expect_ok[i] = judge_state(&scn.expects[i], expect_msg[i], sizeof expect_msg[i]);
+      expect_done[i] = true;
+    }
   }
   for (i = 0U; i < scn.n_expects; i++) {
     const canfdi_sim_expect_t *e = &scn.expects[i];
@@ -602,7 +836,7 @@ int main(int argc, char **argv)
       expect_ok[i] = 0;
       (void)snprintf(expect_msg[i], sizeof expect_msg[i], "%s: not evaluated (beyond the run?)", e->kind);
     } else {
-      /* degradation: judged during the run */
+      /* degradation, dtc_status, occurrence, freeze: judged during the run */
     }
     printf("%s  %s:%u: %s\n", expect_ok[i] ? "PASS" : "FAIL", scn_path, e->line, expect_msg[i]);
     if (!expect_ok[i]) {

@@ -51,10 +51,49 @@ def write(tmp_path: Path, text: str) -> Path:
     ("duration 5\nexpect 6 no_dtc\n", "t.scn:2: expectation after the end"),
     ("duration 5\nexpect 3 degradation dcm broken\n", "t.scn:2: degradation 'broken' must be"),
     ("duration 5\nwobble 3\n", "t.scn:2: unknown directive 'wobble'"),
+    ("duration 5\nexpect 1 dtc_status P0122 TF=2\n", "t.scn:2: status bits 'TF=2': TF must be 0 or 1"),
+    ("duration 5\nexpect 1 dtc_status P0122 TF=1,\n", "t.scn:2: status bits 'TF=1,': TF must be 0 or 1"),
+    ("duration 5\nexpect 1 dtc_status P0122 XX=1\n", "t.scn:2: status bits 'XX=1': expected NAME=0"),
+    ("duration 5\nexpect 1 dtc_status P0122 TF=1,TF=0\n", "t.scn:2: status bits 'TF=1,TF=0': TF named twice"),
+    ("duration 5\nexpect 1 dtc_status P0122 0x1FF\n", "t.scn:2: status byte '0x1FF' must be"),
+    ("duration 5\nexpect 1 occurrence P0122 256\n", "t.scn:2: occurrence '256' must be an integer 0..255"),
+    ("duration 5\nexpect 1 freeze P0122 rpm 1 2\n", "t.scn:2: unknown freeze-frame signal 'rpm'"),
+    ("duration 5\nexpect 1 freeze P0122 time 2 1\n", "t.scn:2: freeze max .1. below min .2."),
+    ("duration 5\ncycle 5\n", "t.scn:2: action at or after the end"),
+    ("duration 5\ncycle 2\nclear 1\n", "t.scn:3: clear at 1 s is before the previous"),
+    ("duration 5\nclear 1 P9999\n", "t.scn:2: unknown trouble code 'P9999'"),
+    ("duration 5\npower_cycle 1 2\n", "t.scn:2: power_cycle <t>"),
 ])
 def test_scenario_errors_name_file_and_line(tmp_path: Path, text: str, needle: str) -> None:
     with pytest.raises(ScenarioError, match=needle.replace("(", r"\(")):
         parse(write(tmp_path, text))
+
+
+def test_dtc_directives_parse_like_c(tmp_path: Path) -> None:
+    text = ("duration 5\ncycle 1\nclear 2\nclear 2 P0122\nclear 2.5 all\npower_cycle 3.0004\n"
+            "expect 1 dtc_status P0122 TF=1,WIR=0,TNCTOC=1\nexpect 1 dtc_status U1A01 0xaf\n"
+            "expect 2 occurrence P0122 3\nexpect 3 freeze P0122 thr_angle -1 25.5\n")
+    p = write(tmp_path, text)
+    scn = parse(p)
+    assert [(a.kind, a.t_us, a.code, a.line) for a in scn.actions] == [
+        ("cycle", 1000000, "", 2), ("clear", 2000000, "", 3), ("clear", 2000000, "P0122", 4),
+        ("clear", 2500000, "", 5), ("power_cycle", 3000400, "", 6)]
+    e = scn.expects
+    assert (e[0].mask, e[0].value, e[1].mask, e[1].value) == (0xC1, 0x41, 0xFF, 0xAF)
+    assert (e[2].kind, e[2].lo, e[3].arg2, e[3].lo, e[3].hi) == ("occurrence", 3.0, "thr_angle", -1.0, 25.5)
+    assert [w.split(": ")[-1] for w in scn.sil_only] == ["cycle", "clear", "clear", "clear", "power_cycle",
+                                                         "expect freeze"]
+    assert check_with_c(p) is None
+    # bus-only expectations: nothing SIL-only
+    assert not parse(write(tmp_path, "duration 5\nexpect 1 dtc_status P0122 TF=0\n")).sil_only
+
+
+def test_sil_only_scenario_refused_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["tests/sil/scenarios/dtc_new_cycle.scn"]) == 2
+    err = capsys.readouterr().err
+    assert "dtc_new_cycle.scn:" in err and ": cycle needs the SIL rig: cycle/clear are not sent over the bus yet" in err
+    assert main([str(write(tmp_path, "duration 5\nexpect 1 freeze P0122 time 0 1\n"))]) == 2
+    assert "t.scn:2: expect freeze needs the SIL rig" in capsys.readouterr().err
 
 
 def test_scenario_parts_and_c_parser_agree(tmp_path: Path) -> None:

@@ -20,6 +20,10 @@ from conftest import as_lockstep, sil_msgs
 # and one that fails in SIL (pending/) so FAIL lines are compared too
 SCENARIOS = ["nominal_setpoints", "tps1_open", "dcm_timeout", "bridge_a_dead", "tps_both_lost", "dcm_ra_up",
              "thr_crc"]
+# DTC status sequences: dtc_status / occurrence judged from EcuDtc frames
+# (their cycle/clear lines act in the SIL rig only; the frames show them)
+DTC_SCENARIOS = ["dtc_fail_pass", "dtc_new_cycle", "dtc_clear", "dtc_aging", "dtc_power_cycle", "dtc_freeze"]
+PENDING_DIR = Path(__file__).resolve().parents[1] / "sil" / "pending"
 AT = re.compile(r"dtc (\w+) .*: at (\d+\.\d{3}) s")
 
 
@@ -33,13 +37,15 @@ def test_candump_logs_of_canfdi_sil_read_by_python_can(sil_run) -> None:
                and a.timestamp == b.timestamp for a, b in zip(ours, theirs))
 
 
-@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("name", SCENARIOS + DTC_SCENARIOS)
 def test_same_verdicts_and_times_as_canfdi_sil(sil_run, name: str) -> None:
     run = sil_run(name)
     scn = parse(run.rel)
     tl = Timeline().feed_all(read_log(run.log))
-    lines = [v.line for v in evaluate(scn, tl)]
-    assert lines == run.verdict_lines
+    # freeze lines are SIL-only (the rig reads the ECU's memory): not compared
+    sil_only = tuple(f".scn:{e.line}: " for e in scn.expects if e.kind == "freeze")
+    lines = [v.line for v in evaluate(scn, tl) if not any(s in v.line for s in sil_only)]
+    assert lines == [ln for ln in run.verdict_lines if not any(s in ln for s in sil_only)]
     assert lines, "scenario without expectations?"
     # the first-report times, read back from canfdi-sil's own PASS/FAIL lines
     checked = 0
@@ -56,7 +62,48 @@ def test_same_verdicts_and_times_as_canfdi_sil(sil_run, name: str) -> None:
     assert checked == sum(e.kind == "dtc" for e in scn.expects)
 
 
-@pytest.mark.parametrize("name", ["tps1_open", "dcm_timeout", "bridge_a_dead"])
+def test_dtc_status_lines_like_canfdi_sil_also_when_failing(sil_run) -> None:
+    # pending/dtc_untested_cycle.scn fails one dtc_status line in SIL: the
+    # FAIL line (and the never-reported rule) must come out identical
+    run = sil_run("dtc_untested_cycle", PENDING_DIR / "dtc_untested_cycle.scn")
+    scn = parse(run.rel)
+    lines = [v.line for v in evaluate(scn, Timeline().feed_all(read_log(run.log)))]
+    assert lines == run.verdict_lines
+    assert sum(ln.startswith("FAIL") and "dtc_status P0122" in ln for ln in lines) == 1
+
+
+def test_dtc_status_never_reported_and_history(sil_run) -> None:
+    run = sil_run("dtc_clear")
+    tl = Timeline().feed_all(read_log(run.log))
+    rec = tl.dtcs["P0122"]
+    # one history entry per change of (status, occurrence), in time order
+    assert [h[0] for h in rec.history] == sorted(h[0] for h in rec.history)
+    assert all(a[1:] != b[1:] for a, b in zip(rec.history, rec.history[1:]))
+    assert rec.state_at(-1) is None
+    since, st, occ = rec.state_at(2_900_000)
+    assert (st, occ) == (0xAE, 1) and since <= 2_900_000
+    assert rec.state_at(3_200_000)[1:] == (0x00, 0)     # after 'clear 3.0 P0122'
+    # a code the ECU never reported (P0638: its test never completed): the
+    # cleared state, occurrence 0
+    assert "P0638" not in tl.dtcs
+    scn = parse(write_scn(run, "duration 6\nexpect 1 dtc_status P0638 TNCSLC=1,TNCTOC=1,TF=0\n"
+                               "expect 1 occurrence P0638 0\nexpect 1 dtc_status P0638 0x00\n"))
+    v = evaluate(scn, tl)
+    assert [x.ok for x in v[:3]] == [True, True, False]
+    assert v[0].text == ("dtc_status P0638 at 1.000 s: TF=0,TNCSLC=1,TNCTOC=1 (expected TF=0,TNCSLC=1,TNCTOC=1) "
+                         "[0x50 never reported: cleared state assumed]")
+    # freeze lines are SIL-only: a verdict, never a crash
+    scn = parse(write_scn(run, "duration 6\nexpect 1 freeze P0122 time 0 1\n"))
+    assert scn.sil_only and not evaluate(scn, tl)[0].ok
+
+
+def write_scn(run, text: str) -> Path:
+    p = run.log.with_suffix(".extra.scn")
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("name", ["tps1_open", "dcm_timeout", "bridge_a_dead", "dtc_new_cycle"])
 def test_lockstep_bus_order_gives_sil_times(sil_run, name: str) -> None:
     run = sil_run(name)
     scn = parse(run.rel)

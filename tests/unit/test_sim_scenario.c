@@ -13,7 +13,7 @@
 #include "gen/canfdi_faults.h"
 #include "unit_main.h"
 
-static canfdi_sim_scn_t scn; /* ~9 kB: static */
+static canfdi_sim_scn_t scn; /* ~17 kB: static */
 
 static const char full_text[] =
     "# every directive once\n"
@@ -201,6 +201,23 @@ static const bad_t bad[] = {
     {"duration 1\nexpect 0.5 weather sunny\n", 2U, "unknown expectation"},
     {"duration 1\nexpect 3 no_dtc\n", 2U, "after the end"},
     {"duration 1\nload fan 0.1\nload fan 0.2\n", 3U, "duplicate load fan"},
+    {"duration 1\nexpect 0.5 dtc_status P0122 TF=2\n", 2U, "TF must be 0 or 1"},
+    {"duration 1\nexpect 0.5 dtc_status P0122 TF=1,\n", 2U, "must be 0 or 1"},
+    {"duration 1\nexpect 0.5 dtc_status P0122 XX=1\n", 2U, "expected NAME=0|1"},
+    {"duration 1\nexpect 0.5 dtc_status P0122 TF=1,TF=0\n", 2U, "TF named twice"},
+    {"duration 1\nexpect 0.5 dtc_status P0122 0x1FF\n", 2U, "status byte"},
+    {"duration 1\nexpect 0.5 dtc_status P0122 0x+1\n", 2U, "status byte"},
+    {"duration 1\nexpect 0.5 dtc_status P0122\n", 2U, "too few arguments"},
+    {"duration 1\nexpect 0.5 occurrence P0122 256\n", 2U, "0..255"},
+    {"duration 1\nexpect 0.5 occurrence P9999 1\n", 2U, "unknown trouble code"},
+    {"duration 1\nexpect 0.5 freeze P0122 rpm 1 2\n", 2U, "unknown freeze-frame signal"},
+    {"duration 1\nexpect 0.5 freeze P0122 time 2 1\n", 2U, "below min"},
+    {"duration 1\ncycle\n", 2U, "too few arguments"},
+    {"duration 1\ncycle 0.5 0.6\n", 2U, "too many arguments"},
+    {"duration 1\ncycle 1\n", 2U, "at or after the end"},
+    {"duration 1\ncycle 0.5\nclear 0.4\n", 3U, "time order"},
+    {"duration 1\nclear 0.5 P9999\n", 2U, "unknown trouble code"},
+    {"duration 1\npower_cycle -1\n", 2U, "out of range"},
     {"duration 1\nspeed step 0 1\xc3\xa9\n", 2U, "non-ASCII"},
     {"duration 1\nspeed step 0 1 2 3 4 5 6 7 8 9 10 11 12 13\n", 2U, "too many tokens"},
 };
@@ -272,11 +289,54 @@ START_TEST(setup_applies_initial_conditions_and_faults)
 }
 END_TEST
 
+START_TEST(dtc_directives_parse)
+{
+  static const char text[] = "duration 5\n"
+                             "cycle 1\n"
+                             "clear 2\n"
+                             "clear 2 P0122\n"
+                             "clear 2.5 all\n"
+                             "power_cycle 3.0004\n"
+                             "expect 1 dtc_status P0122 TF=1,WIR=0,TNCTOC=1\n"
+                             "expect 1 dtc_status U1A01 0xaf\n"
+                             "expect 2 occurrence P0122 3\n"
+                             "expect 3 freeze P0122 thr_angle -1 25.5\n";
+  canfdi_sim_scn_err_t err;
+  ck_assert_msg(canfdi_sim_scn_parse(&scn, text, "dtc.scn", &err) == CANFDI_OK, "%s", err.msg);
+  ck_assert_uint_eq(scn.n_actions, 5U);
+  ck_assert_uint_eq(scn.actions[0].kind, CANFDI_SIM_ACT_CYCLE);
+  ck_assert_int_eq(scn.actions[0].t_us, 1000000);
+  ck_assert_uint_eq(scn.actions[1].kind, CANFDI_SIM_ACT_CLEAR);
+  ck_assert_str_eq(scn.actions[1].code, "");
+  ck_assert_str_eq(scn.actions[2].code, "P0122");
+  ck_assert_str_eq(scn.actions[3].code, "");
+  ck_assert_uint_eq(scn.actions[4].kind, CANFDI_SIM_ACT_POWER_CYCLE);
+  ck_assert_int_eq(scn.actions[4].t_us, 3000400);
+  ck_assert_uint_eq(scn.actions[4].line, 6U);
+  ck_assert_uint_eq(scn.n_expects, 4U);
+  ck_assert_str_eq(scn.expects[0].kind, "dtc_status");
+  ck_assert_uint_eq(scn.expects[0].st_mask, 0xC1U);
+  ck_assert_uint_eq(scn.expects[0].st_value, 0x41U);
+  ck_assert_str_eq(scn.expects[0].arg2, "TF=1,WIR=0,TNCTOC=1");
+  ck_assert_uint_eq(scn.expects[1].st_mask, 0xFFU);
+  ck_assert_uint_eq(scn.expects[1].st_value, 0xAFU);
+  ck_assert_str_eq(scn.expects[2].kind, "occurrence");
+  ck_assert_msg(fabs(scn.expects[2].lo - 3.0) < 1e-12, "%g", scn.expects[2].lo);
+  ck_assert_uint_eq(scn.expects[3].ff_signal, CANFDI_SIM_FF_THR_ANGLE);
+  ck_assert_msg(fabs(scn.expects[3].lo + 1.0) < 1e-12, "%g", scn.expects[3].lo);
+  ck_assert_msg(fabs(scn.expects[3].hi - 25.5) < 1e-12, "%g", scn.expects[3].hi);
+  ck_assert_str_eq(canfdi_sim_ff_name(CANFDI_SIM_FF_DEG_THR), "deg_thr");
+  ck_assert_str_eq(canfdi_sim_status_bit_name(7U), "WIR");
+  ck_assert_str_eq(canfdi_sim_status_bit_name(8U), "?");
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("sim_scenario");
   TCase *tc = tcase_create("parse");
   tcase_add_test(tc, full_scenario_parses);
+  tcase_add_test(tc, dtc_directives_parse);
   tcase_add_test(tc, setup_applies_initial_conditions_and_faults);
   tcase_add_loop_test(tc, shipped_examples_parse, 0, (int)(sizeof examples / sizeof examples[0]));
   suite_add_tcase(s, tc);

@@ -10,6 +10,14 @@ run of the same scenario can be compared line by line:
 - ``expect <t> degradation <dcm|thr> <state>``: the state in the last
   EcuStatus frame before t (canfdi-sil judges it after the step that reaches
   t, so that step's own frames do not count);
+- ``expect <t> dtc_status CODE BITS``: the named status bits (TF, TFTOC,
+  PDTC, CDTC, TNCSLC, TFSLC, TNCTOC, WIR or a byte 0xNN) in the last EcuDtc
+  frame of the code at or before t; a code never reported has the cleared
+  state 0x50 (the ECU sends an on-change frame on every status change);
+- ``expect <t> occurrence CODE N``: DtcOccurrence of that frame (0 if never
+  reported);
+- ``expect <t> freeze ...`` is SIL-only (the rig reads the ECU's memory):
+  judged here as a failure; canfdi-scenario refuses such a scenario first;
 - implicitly, every code that appears and that no ``expect ... dtc`` line
   names fails ("the expected trouble code and no other").
 
@@ -21,8 +29,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from .scenario_file import Scenario
+from .scenario_file import Scenario, bits_text
 from .timeline import Timeline
+
+
+CLEARED = 0x50   # TNCSLC | TNCTOC: the status after init and after a clear
 
 
 @dataclass(frozen=True)
@@ -93,6 +104,25 @@ def evaluate(scn: Scenario, tl: Timeline, label: str | None = None) -> list[Verd
             msg = (f"degradation {e.arg1} at {e.t_s:.3f} s: {state if state is not None else 'no EcuStatus yet'}"
                    f" (expected {e.arg2})")
             out.append(Verdict(state == e.arg2, msg, e.line, where))
+        elif e.kind in ("dtc_status", "occurrence"):
+            rec = tl.dtcs.get(e.arg1)
+            got = rec.state_at(te) if rec is not None else None
+            if got is None:
+                st, occ, src = CLEARED, 0, "never reported: cleared state assumed"
+            else:
+                st, occ, src = got[1], got[2], f"reported since {got[0] * 1e-6:.3f} s"
+            if tl.end_us < te:
+                out.append(Verdict(False, f"{e.kind}: not evaluated (beyond the run?)", e.line, where))
+            elif e.kind == "dtc_status":
+                msg = (f"dtc_status {e.arg1} at {e.t_s:.3f} s: {bits_text(e.mask, st)} (expected "
+                       f"{bits_text(e.mask, e.value)}) [0x{st:02X} {src}]")
+                out.append(Verdict(st & e.mask == e.value, msg, e.line, where, code=e.arg1))
+            else:
+                msg = f"occurrence {e.arg1} at {e.t_s:.3f} s: {occ} (expected {e.lo:.0f}) [{src}]"
+                out.append(Verdict(occ == round(e.lo), msg, e.line, where, code=e.arg1))
+        elif e.kind == "freeze":
+            out.append(Verdict(False, f"freeze {e.arg1} {e.arg2} at {e.t_s:.3f} s: not observable on the bus "
+                               "(SIL only: canfdi-sil reads the ECU's memory)", e.line, where, code=e.arg1))
     named = {e.arg1 for e in scn.expects if e.kind == "dtc"}
     desc = tl.descriptions
     for rec in tl.dtcs.values():

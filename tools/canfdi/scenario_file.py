@@ -1,9 +1,11 @@
 """The parts of a scenario file (host_sim/SCENARIO.md) the Python tools need.
 
 The C parser (``canfdi-sim --check -s FILE``) is the authority on the whole
-format; this reader takes only ``duration``, ``seed``, ``fault`` and
-``expect`` lines, checks what it takes with the same file:line messages, and
-accepts every other known directive without looking at it. ``check_with_c``
+format; this reader takes only ``duration``, ``seed``, ``fault``, ``expect``
+and the ECU-side actions ``cycle``, ``clear`` and ``power_cycle`` (which only
+the SIL rig performs: ``Scenario.sil_only`` names them), checks what it takes
+with the same file:line messages, and accepts every other known directive
+without looking at it. ``check_with_c``
 runs the C parser too when it has been built, so a file the HIL tools accept
 is never one the simulator would refuse.
 
@@ -21,7 +23,14 @@ from . import REPO_ROOT
 from .catalogue import MODES, dtc_by_code, fault_by_name
 
 MAX_DURATION_S = 100000.0
-DIRECTIVES = ("duration", "seed", "noise", "init", "param", "speed", "angle", "load", "fault", "expect")
+DIRECTIVES = ("duration", "seed", "noise", "init", "param", "speed", "angle", "load", "fault", "expect",
+              "cycle", "clear", "power_cycle")
+ACTIONS = ("cycle", "clear", "power_cycle")
+# expect dtc_status bit names, bit 0 first (ISO 14229-1 DTC status byte)
+STATUS_BITS = ("TF", "TFTOC", "PDTC", "CDTC", "TNCSLC", "TFSLC", "TNCTOC", "WIR")
+# expect freeze signals (canfdi_dtc_ff_t; the SIL rig reads them from the ECU's memory)
+FREEZE_SIGNALS = ("time", "dcm_speed", "dcm_ia", "dcm_ua", "thr_angle", "dcm_supply", "deg_dcm", "deg_thr")
+MAX_ACTIONS = 64
 SIM_BIN = REPO_ROOT / "build" / "bin" / "canfdi-sim"
 
 
@@ -50,13 +59,26 @@ class FaultLine:
 class Expect:
     line: int
     t_s: float
-    kind: str                    # dtc | no_dtc | degradation
+    kind: str                    # dtc | no_dtc | degradation | dtc_status | occurrence | freeze
     arg1: str = ""               # code or subsystem
-    arg2: str = ""               # pending|confirmed|'' or the state
+    arg2: str = ""               # pending|confirmed|'', the state, the bits as written, the signal
+    mask: int = 0                # dtc_status: bits named
+    value: int = 0               # dtc_status: their expected values
+    lo: float = 0.0              # occurrence: n; freeze: min
+    hi: float = 0.0              # occurrence: n; freeze: max
 
     @property
     def t_us(self) -> int:
         return to_us(self.t_s)
+
+
+@dataclass(frozen=True)
+class Action:
+    """cycle / clear / power_cycle: an ECU-side action (SIL rig only)."""
+    line: int
+    t_us: int
+    kind: str                    # cycle | clear | power_cycle
+    code: str = ""               # clear: the trouble code, '' = all
 
 
 @dataclass
@@ -66,6 +88,14 @@ class Scenario:
     seed: int = 1
     faults: list[FaultLine] = field(default_factory=list)
     expects: list[Expect] = field(default_factory=list)
+    actions: list[Action] = field(default_factory=list)
+
+    @property
+    def sil_only(self) -> list[str]:
+        """'file:line: directive' of every line only the SIL rig can act on (none: HIL can run it)."""
+        out = [f"{self.path}:{a.line}: {a.kind}" for a in self.actions]
+        out += [f"{self.path}:{e.line}: expect freeze" for e in self.expects if e.kind == "freeze"]
+        return sorted(out, key=lambda w: int(w.rsplit(":", 2)[1]))
 
     @property
     def duration_us(self) -> int:
@@ -114,17 +144,52 @@ def _fault(where: str, n: int, tok: list[str]) -> FaultLine:
     return FaultLine(n, to_us(t0), f.name, mode, mag, ramp, period, duty)
 
 
+def parse_status_bits(where: str, text: str) -> tuple[int, int]:
+    """'TF=1,PDTC=0,...' (any subset, each once) or '0xNN' (all eight) -> (mask, value)."""
+    if text[:2] in ("0x", "0X"):
+        h = text[2:]
+        if not 1 <= len(h) <= 2 or any(c not in "0123456789abcdefABCDEF" for c in h):
+            raise ScenarioError(f"{where}: status byte '{text}' must be 0x00..0xFF")
+        return 0xFF, int(h, 16)
+    mask = value = 0
+    parts = text.split(",")
+    for i, part in enumerate(parts):
+        name, eq, v = part.partition("=")
+        if not eq or name not in STATUS_BITS:
+            raise ScenarioError(f"{where}: status bits '{text}': expected NAME=0|1[,NAME=0|1...] with NAME one of "
+                                "TF, TFTOC, PDTC, CDTC, TNCSLC, TFSLC, TNCTOC, WIR (or a byte 0xNN)")
+        if v not in ("0", "1") or (i == len(parts) - 2 and parts[-1] == ""):
+            raise ScenarioError(f"{where}: status bits '{text}': {name} must be 0 or 1")
+        b = STATUS_BITS.index(name)
+        if mask & (1 << b):
+            raise ScenarioError(f"{where}: status bits '{text}': {name} named twice")
+        mask |= 1 << b
+        value |= int(v) << b
+    return mask, value
+
+
+def bits_text(mask: int, v: int) -> str:
+    """'TF=1,PDTC=0' for the bits in mask, values from v (bit order), as canfdi-sil prints."""
+    return ",".join(f"{STATUS_BITS[b]}={(v >> b) & 1}" for b in range(8) if mask >> b & 1)
+
+
+def _code(where: str, code: str) -> None:
+    if code not in dtc_by_code():
+        raise ScenarioError(f"{where}: unknown trouble code '{code}' (see dbc/dtcs.csv)")
+
+
 def _expect(where: str, n: int, tok: list[str]) -> Expect:
-    if not 3 <= len(tok) <= 5:
+    if not 3 <= len(tok) <= 7:
         raise ScenarioError(f"{where}: expect <t> dtc <code> [pending|confirmed] | expect <t> no_dtc"
-                            " | expect <t> degradation <dcm|thr> <state>")
+                            " | expect <t> degradation <dcm|thr> <state> | expect <t> dtc_status <code> <bits>"
+                            " | expect <t> occurrence <code> <n> | expect <t> freeze <code> <signal> <min> <max>")
     t = _num(where, tok[1], "expect time", 0.0, MAX_DURATION_S)
     kind = tok[2]
+    extra: dict[str, float | int] = {}
     if kind == "dtc":
-        if len(tok) < 4:
+        if not 4 <= len(tok) <= 5:
             raise ScenarioError(f"{where}: expect <t> dtc <code> [pending|confirmed]")
-        if tok[3] not in dtc_by_code():
-            raise ScenarioError(f"{where}: unknown trouble code '{tok[3]}' (see dbc/dtcs.csv)")
+        _code(where, tok[3])
         if len(tok) == 5 and tok[4] not in ("pending", "confirmed"):
             raise ScenarioError(f"{where}: dtc status '{tok[4]}' must be pending or confirmed")
     elif kind == "no_dtc":
@@ -137,9 +202,56 @@ def _expect(where: str, n: int, tok: list[str]) -> Expect:
             raise ScenarioError(f"{where}: subsystem '{tok[3]}' must be dcm or thr")
         if tok[4] not in ("normal", "degraded", "fail_safe"):
             raise ScenarioError(f"{where}: degradation '{tok[4]}' must be normal, degraded or fail_safe")
+    elif kind == "dtc_status":
+        if len(tok) != 5:
+            raise ScenarioError(f"{where}: expect <t> dtc_status <code> <NAME=0|1,...>")
+        _code(where, tok[3])
+        mask, value = parse_status_bits(where, tok[4])
+        extra = {"mask": mask, "value": value}
+    elif kind == "occurrence":
+        if len(tok) != 5:
+            raise ScenarioError(f"{where}: expect <t> occurrence <code> <n>")
+        _code(where, tok[3])
+        if not tok[4].isdigit() or int(tok[4]) > 255:
+            raise ScenarioError(f"{where}: occurrence '{tok[4]}' must be an integer 0..255")
+        extra = {"lo": float(int(tok[4])), "hi": float(int(tok[4]))}
+    elif kind == "freeze":
+        if len(tok) != 7:
+            raise ScenarioError(f"{where}: expect <t> freeze <code> <signal> <min> <max>")
+        _code(where, tok[3])
+        if tok[4] not in FREEZE_SIGNALS:
+            raise ScenarioError(f"{where}: unknown freeze-frame signal '{tok[4]}' ({', '.join(FREEZE_SIGNALS)})")
+        lo = _num(where, tok[5], "freeze min", -1e9, 1e9)
+        hi = _num(where, tok[6], "freeze max", -1e9, 1e9)
+        if hi < lo:
+            raise ScenarioError(f"{where}: freeze max ({hi:g}) below min ({lo:g})")
+        extra = {"lo": lo, "hi": hi}
     else:
-        raise ScenarioError(f"{where}: unknown expectation '{kind}' (dtc, no_dtc, degradation)")
-    return Expect(n, t, kind, tok[3] if len(tok) > 3 else "", tok[4] if len(tok) > 4 else "")
+        raise ScenarioError(f"{where}: unknown expectation '{kind}' (dtc, no_dtc, degradation, dtc_status, "
+                            "occurrence, freeze)")
+    return Expect(n, t, kind, tok[3] if len(tok) > 3 else "", tok[4] if len(tok) > 4 else "", **extra)  # type: ignore[arg-type]
+
+
+def _action(where: str, n: int, tok: list[str], prev: list[Action]) -> Action:
+    kind = tok[0]
+    if kind == "clear":
+        if not 2 <= len(tok) <= 3:
+            raise ScenarioError(f"{where}: clear <t> [<code>|all]")
+    elif len(tok) != 2:
+        raise ScenarioError(f"{where}: {kind} <t>")
+    t = _num(where, tok[1], "action time", 0.0, MAX_DURATION_S)
+    code = ""
+    if len(tok) == 3 and tok[2] != "all":
+        if tok[2] not in dtc_by_code():
+            raise ScenarioError(f"{where}: unknown trouble code '{tok[2]}' (see dbc/dtcs.csv, or all)")
+        code = tok[2]
+    a = Action(n, to_us(t), kind, code)
+    if prev and a.t_us < prev[-1].t_us:
+        raise ScenarioError(f"{where}: {kind} at {t:g} s is before the previous cycle/clear/power_cycle line "
+                            "(write them in time order)")
+    if len(prev) >= MAX_ACTIONS:
+        raise ScenarioError(f"{where}: too many cycle/clear/power_cycle lines (at most {MAX_ACTIONS})")
+    return a
 
 
 def parse(path: Path) -> Scenario:
@@ -171,11 +283,17 @@ def parse(path: Path) -> Scenario:
             scn.faults.append(_fault(where, n, tok))
         elif d == "expect":
             scn.expects.append(_expect(where, n, tok))
+        elif d in ACTIONS:
+            scn.actions.append(_action(where, n, tok, scn.actions))
     if not have_duration:
         raise ScenarioError(f"{path}: no duration (required)")
     for f in scn.faults:
         if f.t_start_us >= scn.duration_us:
             raise ScenarioError(f"{path}:{f.line}: fault starts at or after the end of the scenario")
+    for a in scn.actions:
+        if a.t_us >= scn.duration_us:
+            raise ScenarioError(f"{path}:{a.line}: action at or after the end of the scenario "
+                                f"(duration {scn.duration_s:g} s)")
     for e in scn.expects:
         if e.t_s > scn.duration_s:
             raise ScenarioError(f"{path}:{e.line}: expectation after the end of the scenario "

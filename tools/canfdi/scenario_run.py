@@ -44,7 +44,9 @@ examples:
   canfdi-scenario --no-start --log run.log my.scn    # ECU and sim already running
 
 exit status: 0 every expectation met and the run was clean; 1 an expectation
-failed, a program failed, or frames were lost; 2 bad usage or invalid scenario.
+failed, a program failed, or frames were lost; 2 bad usage or invalid scenario,
+or a scenario only the SIL rig can run (cycle, clear, power_cycle or expect
+freeze: ECU-side actions and reads that are not on the bus yet).
 """
 
 
@@ -239,6 +241,10 @@ def main(argv: list[str] | None = None) -> int:
         scn = load(a.scenario, a.sim)
     except ScenarioError as e:
         print(f"canfdi-scenario: {e}", file=sys.stderr)
+        return 2
+    if scn.sil_only:
+        print(f"canfdi-scenario: {scn.sil_only[0]} needs the SIL rig: cycle/clear are not sent over the bus yet "
+              "(nor power_cycle, and freeze frames are not read over it); run it with canfdi-sil", file=sys.stderr)
         return 2
     if not a.no_start:
         for prog in (a.ecu, a.sim):

@@ -102,6 +102,18 @@ class DtcRecord:
     first_failed_us: int = -1      # first testFailed
     first_pending_us: int = -1
     first_confirmed_us: int = -1
+    # (t_us, status, occurrence) of each frame whose status or occurrence
+    # differs from the previous frame's (the first frame too)
+    history: list[tuple[int, int, int]] = field(default_factory=list)
+
+    def state_at(self, t_us: int) -> tuple[int, int, int] | None:
+        """(since_us, status, occurrence) of the last frame at or before t_us; None: not reported yet."""
+        last = None
+        for h in self.history:
+            if h[0] > t_us:
+                break
+            last = h
+        return last
 
     @property
     def first_reported_us(self) -> int:
@@ -344,6 +356,9 @@ class Timeline:
             rec.first_pending_us = t
         if cf and rec.first_confirmed_us < 0:
             rec.first_confirmed_us = t
+        occ = int(s["DtcOccurrence"])
+        if not rec.history or rec.history[-1][1:] != (st, occ):
+            rec.history.append((t, st, occ))
         if (st ^ rec.status) & 0x0D:
             word = ("confirmed" if tf else "stored") if cf else ("testFailed" if tf else "passed")
             if pd and not cf:
