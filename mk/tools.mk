@@ -5,9 +5,9 @@
 #                     canfdi-sil, live buses are python-can's virtual
 #                     interface); part of `make test`
 #
-# The console commands canfdi-inject / canfdi-watch / canfdi-scenario are
-# installed into .venv/bin by `make deps` (tools/deps.sh reinstalls the
-# editable package whenever tools/pyproject.toml changes).
+# The console commands canfdi-inject / canfdi-watch / canfdi-scenario /
+# canfdi-plot are installed into .venv/bin by `make deps` (tools/deps.sh
+# reinstalls the editable package whenever tools/pyproject.toml changes).
 
 .PHONY: tools-test
 tools-test: $(BUILD)/bin/canfdi-sil

@@ -3,7 +3,8 @@
 Modules:
   catalogue      the fault catalogue (dbc/faults.csv) and DTC table (dbc/dtcs.csv)
   e2e            CRC-8 SAE J1850 and rolling-counter protection of 1 ms frames
-  plot           PNG of a canfdi-sil trace
+  plot           PNG of a canfdi-sil trace (CSV)
+  logplot        PNG of a recorded bus log, from its frames alone
   busargs        -i/-c/-b bus options and defaults, as python-can's tools
   logio          tolerant reading of recorded logs (candump .log and can.LogReader)
   timeline       frames -> diagnostic events on simulated time
@@ -11,7 +12,7 @@ Modules:
   expect         canfdi-sil's judgement of expect lines, on a timeline
   hil            ECU/sim processes and the bus recorder of a HIL run
 Console commands: canfdi-inject (inject), canfdi-watch (watch),
-canfdi-scenario (scenario_run).
+canfdi-scenario (scenario_run), canfdi-plot (logplot).
 """
 from pathlib import Path
 
