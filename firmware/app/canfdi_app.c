@@ -482,6 +482,12 @@ static void step_symptoms(canfdi_app_t *app)
   } else {
     /* in band */
   }
+  if (app->rx.in[CANFDI_RX_IN_THR_TPS1].quality == (uint8_t)CANFDI_RX_INVALID) {
+    f |= CANFDI_SYM_F_TPS1_INVALID;
+  }
+  if (app->rx.in[CANFDI_RX_IN_THR_TPS2].quality == (uint8_t)CANFDI_RX_INVALID) {
+    f |= CANFDI_SYM_F_TPS2_INVALID;
+  }
   if ((app->vote_out.isolated_mask & CANFDI_VOTE_BIT_TPS1) != 0U) {
     f |= CANFDI_SYM_F_TPS1_OUTLIER;
   }

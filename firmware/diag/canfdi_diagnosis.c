@@ -49,26 +49,32 @@ static const rule_t model_rules[] = {
 /* clang-format on */
 #define N_MODEL_RULES (sizeof(model_rules) / sizeof(model_rules[0]))
 
-/* Hard rules on the (persistent) flags. */
+/* Hard rules on the (persistent) flags. A rule cannot run while any of
+ * its `untested` raw flags is set this step (its input is INVALID: never
+ * received or lost): it then reports nothing, so the trouble code's
+ * testNotCompletedThisOperationCycle stays set (ISO 14229-1) instead of a
+ * pass judged from a stale range result. */
 typedef struct {
   uint8_t fault;
   uint8_t comp;
-  uint16_t req;    /* all of these */
-  uint16_t forbid; /* none of these */
+  uint16_t req;      /* all of these */
+  uint16_t forbid;   /* none of these */
+  uint32_t untested; /* any of these (raw, this step): not testable */
 } hard_rule_t;
 
 static const hard_rule_t hard_rules[] = {
-    {CANFDI_FAULT_DCM_BRIDGE_A_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_A_DEAD, CANFDI_SYM_F_BRIDGE_B_DEAD},
-    {CANFDI_FAULT_DCM_BRIDGES_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_B_DEAD, 0U},
-    {CANFDI_FAULT_THR_TPS1_OPEN, COMP_THR, CANFDI_SYM_F_TPS1_LOW, CANFDI_SYM_F_TPS2_LOW},
-    {CANFDI_FAULT_THR_TPS1_SHORT, COMP_THR, CANFDI_SYM_F_TPS1_HIGH, 0U},
-    {CANFDI_FAULT_THR_TPS2_OPEN, COMP_THR, CANFDI_SYM_F_TPS2_LOW, CANFDI_SYM_F_TPS1_LOW},
-    {CANFDI_FAULT_THR_TPS2_SHORT, COMP_THR, CANFDI_SYM_F_TPS2_HIGH, 0U},
-    {CANFDI_FAULT_THR_TPS_BOTH_LOST, COMP_THR, CANFDI_SYM_F_TPS1_LOW | CANFDI_SYM_F_TPS2_LOW, 0U},
-    {CANFDI_FAULT_THR_TPS1_DRIFT, COMP_THR, CANFDI_SYM_F_TPS1_OUTLIER, CANFDI_SYM_F_TPS2_OUTLIER},
-    {CANFDI_FAULT_THR_TPS2_DRIFT, COMP_THR, CANFDI_SYM_F_TPS2_OUTLIER, CANFDI_SYM_F_TPS1_OUTLIER},
-    {CANFDI_FAULT_THR_MOTOR_OPEN, COMP_THR, CANFDI_SYM_F_THR_NO_CURRENT, 0U},
-    {CANFDI_FAULT_THR_JAMMED, COMP_THR, CANFDI_SYM_F_THR_NOT_FOLLOWING, CANFDI_SYM_F_THR_NO_CURRENT},
+    {CANFDI_FAULT_DCM_BRIDGE_A_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_A_DEAD, CANFDI_SYM_F_BRIDGE_B_DEAD, 0U},
+    {CANFDI_FAULT_DCM_BRIDGES_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_B_DEAD, 0U, 0U},
+    {CANFDI_FAULT_THR_TPS1_OPEN, COMP_THR, CANFDI_SYM_F_TPS1_LOW, CANFDI_SYM_F_TPS2_LOW, CANFDI_SYM_F_TPS1_INVALID},
+    {CANFDI_FAULT_THR_TPS1_SHORT, COMP_THR, CANFDI_SYM_F_TPS1_HIGH, 0U, CANFDI_SYM_F_TPS1_INVALID},
+    {CANFDI_FAULT_THR_TPS2_OPEN, COMP_THR, CANFDI_SYM_F_TPS2_LOW, CANFDI_SYM_F_TPS1_LOW, CANFDI_SYM_F_TPS2_INVALID},
+    {CANFDI_FAULT_THR_TPS2_SHORT, COMP_THR, CANFDI_SYM_F_TPS2_HIGH, 0U, CANFDI_SYM_F_TPS2_INVALID},
+    {CANFDI_FAULT_THR_TPS_BOTH_LOST, COMP_THR, CANFDI_SYM_F_TPS1_LOW | CANFDI_SYM_F_TPS2_LOW, 0U,
+     CANFDI_SYM_F_TPS1_INVALID | CANFDI_SYM_F_TPS2_INVALID},
+    {CANFDI_FAULT_THR_TPS1_DRIFT, COMP_THR, CANFDI_SYM_F_TPS1_OUTLIER, CANFDI_SYM_F_TPS2_OUTLIER, 0U},
+    {CANFDI_FAULT_THR_TPS2_DRIFT, COMP_THR, CANFDI_SYM_F_TPS2_OUTLIER, CANFDI_SYM_F_TPS1_OUTLIER, 0U},
+    {CANFDI_FAULT_THR_MOTOR_OPEN, COMP_THR, CANFDI_SYM_F_THR_NO_CURRENT, 0U, 0U},
+    {CANFDI_FAULT_THR_JAMMED, COMP_THR, CANFDI_SYM_F_THR_NOT_FOLLOWING, CANFDI_SYM_F_THR_NO_CURRENT, 0U},
 };
 #define N_HARD_RULES (sizeof(hard_rules) / sizeof(hard_rules[0]))
 
@@ -519,7 +525,9 @@ void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     }
     for (i = 0U; i < N_HARD_RULES; i++) {
       const hard_rule_t *h = &hard_rules[i];
-      if (hard_fires(h, f)) {
+      if ((s->flags & h->untested) != 0U) {
+        hv[h->fault] = V_NONE;
+      } else if (hard_fires(h, f)) {
         hv[h->fault] = V_FAIL;
         hard_any[h->comp] = true;
       } else {

@@ -57,6 +57,10 @@
 #define CANFDI_SYM_F_DCM_EXCITED (1UL << 12)    /* estimators see enough excitation */
 #define CANFDI_SYM_F_THR_EXCITED (1UL << 13)
 #define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 14) /* dcm_ua_cmd_rn_q16 valid */
+#define CANFDI_SYM_F_TPS1_INVALID (1UL << 15)   /* TPS1 input INVALID this step (never
+                                                 * received or lost): its range test
+                                                 * cannot run */
+#define CANFDI_SYM_F_TPS2_INVALID (1UL << 16)
 
 typedef struct {
   uint32_t now_ms;

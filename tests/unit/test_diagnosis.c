@@ -224,6 +224,35 @@ START_TEST(test_fault_free_passes)
 }
 END_TEST
 
+/* A TPS input that is INVALID (never received, lost) cannot be range
+ * tested: its range faults report nothing (not PASSED from a stale range
+ * result, not FAILED from a latched one), the other sensor's still do. */
+START_TEST(test_invalid_input_not_tested)
+{
+  static const vec_t tps1_lost = {"tps1_lost", 0U, 0U, {0}, {0}, {0}, {0}, 0, 0,
+                                  F_UAC | CANFDI_SYM_F_TPS1_INVALID};
+  static const vec_t tps1_lost_low = {"tps1_lost_low", 0U, 0U, {0}, {0}, {0}, {0}, 0, 0,
+                                      F_UAC | CANFDI_SYM_F_TPS1_INVALID | CANFDI_SYM_F_TPS1_LOW};
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 100U; k++) {
+    build(&s, &tps1_lost, k, 0.0, 0.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS1_OPEN], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS1_SHORT], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS_BOTH_LOST], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS2_OPEN], CANFDI_DIAG_REPORT_PASSED);
+  for (k = 0U; k < 100U; k++) {
+    build(&s, &tps1_lost_low, k, 0.0, 0.0);
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS1_OPEN], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_uint_eq(count_failed(), 0U);
+}
+END_TEST
+
 /* Noise up to just below the threshold on every channel, any sign, and
  * parameter deviations just inside their thresholds: nothing. */
 START_TEST(test_noise_below_threshold)
@@ -666,6 +695,7 @@ static Suite *make_suite(void)
   suite_add_tcase(s, tc);
   tc = tcase_create("false_alarms");
   tcase_add_test(tc, test_fault_free_passes);
+  tcase_add_test(tc, test_invalid_input_not_tested);
   tcase_add_test(tc, test_noise_below_threshold);
   tcase_add_test(tc, test_transient_burst);
   tcase_add_test(tc, test_cold_winding);
