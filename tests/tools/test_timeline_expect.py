@@ -23,7 +23,7 @@ SCENARIOS = ["nominal_setpoints", "tps1_open", "dcm_timeout", "bridge_a_dead", "
 # DTC status sequences: dtc_status / occurrence judged from EcuDtc frames
 # (their cycle/clear lines act in the SIL rig only; the frames show them)
 DTC_SCENARIOS = ["dtc_fail_pass", "dtc_new_cycle", "dtc_clear", "dtc_aging", "dtc_power_cycle", "dtc_freeze"]
-PENDING_DIR = Path(__file__).resolve().parents[1] / "sil" / "pending"
+DATA_DIR = Path(__file__).resolve().parent / "data"
 AT = re.compile(r"dtc (\w+) .*: at (\d+\.\d{3}) s")
 
 
@@ -63,9 +63,9 @@ def test_same_verdicts_and_times_as_canfdi_sil(sil_run, name: str) -> None:
 
 
 def test_dtc_status_lines_like_canfdi_sil_also_when_failing(sil_run) -> None:
-    # pending/dtc_untested_cycle.scn fails one dtc_status line in SIL: the
-    # FAIL line (and the never-reported rule) must come out identical
-    run = sil_run("dtc_untested_cycle", PENDING_DIR / "dtc_untested_cycle.scn")
+    # data/dtc_status_failing.scn fails one dtc_status line in SIL on
+    # purpose: the FAIL line (and the never-reported rule) must come out identical
+    run = sil_run("dtc_status_failing", DATA_DIR / "dtc_status_failing.scn")
     scn = parse(run.rel)
     lines = [v.line for v in evaluate(scn, Timeline().feed_all(read_log(run.log)))]
     assert lines == run.verdict_lines
