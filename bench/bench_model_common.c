@@ -41,6 +41,8 @@ const bm_chan_info_t bm_chan[BM_N_CH] = {
     {"est_thr.k_s", "k_s", "N m/rad", BM_KIND_PARAMETER, BM_PLANT_THR, 0.087},
     {"est_thr.P", "P", "N m", BM_KIND_PARAMETER, BM_PLANT_THR, 0.396},
     {"est_thr.T_c", "T_c", "N m", BM_KIND_PARAMETER, BM_PLANT_THR, 0.284},
+    {"est_thr.fast_P", "fP", "N m", BM_KIND_PARAMETER, BM_PLANT_THR, 0.396},
+    {"est_thr.fast_T_c", "fTc", "N m", BM_KIND_PARAMETER, BM_PLANT_THR, 0.284},
     {"command_vs_measured_ua", "Ucmd", "V", BM_KIND_SIGNAL, BM_PLANT_DCM, 0.0},
     {"dcm_tracking_error", "wtrk", "rad/s", BM_KIND_SIGNAL, BM_PLANT_DCM, 0.0},
     {"thr_tracking_error", "atrk", "deg", BM_KIND_SIGNAL, BM_PLANT_THR, 0.0},
@@ -262,6 +264,11 @@ void bm_rig_step(bm_rig_t *r, double speed_ref_rad_s, double angle_ref_deg, doub
     set(r, BM_CH_T_KS, fq24(canfdi_est_thr_spring_q24(&r->ethr)), cm);
     set(r, BM_CH_T_P, fq16(canfdi_est_thr_pretension_q16(&r->ethr)), cm);
     set(r, BM_CH_T_TC, fq16(canfdi_est_thr_friction_q16(&r->ethr)), cm);
+    /* the fast structured test's relative deviations on the nominal values */
+    set(r, BM_CH_T_FP, 0.396 * (1.0 + fq16(canfdi_est_thr_fast_spring_dev_q16(&r->ethr))),
+        canfdi_est_thr_fast_valid(&r->ethr));
+    set(r, BM_CH_T_FTC, 0.284 * (1.0 + fq16(canfdi_est_thr_fast_friction_dev_q16(&r->ethr))),
+        canfdi_est_thr_fast_valid(&r->ethr));
   }
   /* The measured U_A is the voltage held over the interval that ends now,
    * i.e. the command of this step as the bridge could deliver it. */

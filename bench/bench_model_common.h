@@ -72,6 +72,8 @@ enum {
   BM_CH_T_KS,   /* spring constant [N m/rad] */
   BM_CH_T_P,    /* pretension [N m] */
   BM_CH_T_TC,   /* Coulomb friction [N m] */
+  BM_CH_T_FP,   /* fast test: spring torque scale as pretension P_nom (1 + a) [N m] */
+  BM_CH_T_FTC,  /* fast test: Coulomb friction T_c,nom (1 + dev) [N m] */
   BM_CH_UA_CMD, /* measured U_A - command clamped to the measured supply [V] */
   BM_CH_D_TRK,  /* speed setpoint - measured speed [rad/s] */
   BM_CH_T_TRK,  /* angle setpoint - measured angle [deg] */

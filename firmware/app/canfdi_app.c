@@ -458,15 +458,16 @@ static void step_symptoms(canfdi_app_t *app)
                 (canfdi_est_dcm_mech_converged(&app->est_dcm) ? 0x0CU : 0U));
   s->thr_pdev_q16[CANFDI_SYM_THR_P_R] = pdev_q16(canfdi_est_thr_r_q16(&app->est_thr), et->r_nom_q16);
   s->thr_pdev_q16[CANFDI_SYM_THR_P_K] = pdev_q16(canfdi_est_thr_k_q16(&app->est_thr), et->k_nom_q16);
-  /* The spring channel is the pretension: k_s is identified only during
-   * sweeps and swings after friction changes (symptom bench), while the
-   * pretension is well determined and carries a weak spring as well. */
-  s->thr_pdev_q16[CANFDI_SYM_THR_P_SPRING] =
-      pdev_q16(canfdi_est_thr_pretension_q16(&app->est_thr), et->pretension_nom_q16);
-  s->thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] =
-      pdev_q16(canfdi_est_thr_friction_q16(&app->est_thr), et->friction_nom_q16);
+  /* Spring and friction channels: the fast structured test of the
+   * estimator (canfdi_est_thr.h, "Fast mechanical test"): the nominal
+   * mechanical residual's correlation with the spring torque and with the
+   * friction sign over ~0.3 s of motion in both directions. The 5-parameter
+   * RLS needed 1.6-2.8 s after a fault (and ~6 s after start) to separate
+   * k_s, P and T_c; the issue asks for 1 s. */
+  s->thr_pdev_q16[CANFDI_SYM_THR_P_SPRING] = canfdi_est_thr_fast_spring_dev_q16(&app->est_thr);
+  s->thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] = canfdi_est_thr_fast_friction_dev_q16(&app->est_thr);
   s->thr_pdev_valid = !app->thr_est_on ? 0U : (uint8_t)((canfdi_est_thr_el_converged(&app->est_thr) ? 0x03U : 0U) |
-                                (canfdi_est_thr_mech_converged(&app->est_thr) ? 0x0CU : 0U));
+                                (canfdi_est_thr_fast_valid(&app->est_thr) ? 0x0CU : 0U));
 
   if (canfdi_limit_symptom(&app->tps_range[0]) == CANFDI_LIMIT_BELOW_MIN) {
     f |= CANFDI_SYM_F_TPS1_LOW;

@@ -77,7 +77,7 @@
  * 30..32 k instructions per step on average (`make sil-bench`). The same
  * run shows the ECU's frames bit-identical between the host build and both
  * target builds.
- * Memory: sizeof(canfdi_app_t) = 9408 bytes on Cortex-M0+/M4 (928 of them
+ * Memory: sizeof(canfdi_app_t) = 9496 bytes on Cortex-M0+/M4 (~940 of them
  * the calibration copy), all of the application's RAM (static; `make
  * firmware` shows it in .bss); code ~5.4 kB for this module (M0+, -Os) on
  * top of the modules it calls. Stack: canfdi_app_step 296 bytes (M0+,

@@ -6,6 +6,9 @@
 #include "core/canfdi_fixp.h"
 
 #define ONE_Q16 65536
+
+/* torque bound of the fast test, N m (4x the valve's largest, K x 10 A) */
+#define FAST_TQ_MAX_Q16 (16 * ONE_Q16)
 #define HALF_T_Q31 CANFDI_Q31_RATIO(CANFDI_CFG_STEP_US, 2000000)
 /* pi / 180 for the degree-valued defaults */
 #define DEG_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_((int64_t)(num) * 314159265, (int64_t)(den) * 18000000000LL, 16))
@@ -37,6 +40,65 @@ void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
   cfg->pretension_nom_q16 = (int32_t)CANFDI_QN_RATIO_(396, 1000, 16);
   cfg->friction_nom_q16 = (int32_t)CANFDI_QN_RATIO_(284, 1000, 16);
   cfg->limp_home_q16 = DEG_Q16(65, 10);
+  cfg->fast_shift = 6U;
+  cfg->fast_min_updates = 100U;
+  cfg->fast_sep_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 4, 16);
+  cfg->fast_stale_steps = 500U;
+}
+
+/* EW mean m += (x - m) 2^-shift, Q32; rounded, saturating. */
+static int64_t ew_q32(int64_t m, int64_t x, unsigned shift)
+{
+  return canfdi_add_s64_sat(m, canfdi_asr64_rnd(canfdi_sub_s64_sat(x, m), shift));
+}
+
+/* One update of the fast structured test on the SVF outputs (header). */
+static void fast_update(canfdi_est_thr_t *e, int32_t i_q16, int32_t a_q16, int32_t da_q16, int32_t d2a_q16,
+                        int32_t s_q16)
+{
+  const canfdi_est_thr_cfg_t *c = &e->cfg;
+  const unsigned sh = c->fast_shift;
+  /* nominal spring torque c, Q16.16 N m */
+  const int32_t cs = canfdi_clamp_s32(
+      canfdi_add_s32_sat(canfdi_mul_s32_qn(c->spring_nom_q24, canfdi_sub_s32_sat(a_q16, c->limp_home_q16), 24U),
+                         c->pretension_nom_q16),
+      -FAST_TQ_MAX_Q16, FAST_TQ_MAX_Q16);
+  int64_t r = (int64_t)canfdi_mul_s32_qn(c->k_nom_q16, i_q16, 16U);
+  int32_t r_q16;
+  r -= (int64_t)canfdi_mul_s32_qn(c->j_nom_q24, d2a_q16, 24U);
+  r -= (int64_t)canfdi_mul_s32_qn(c->b_nom_q24, da_q16, 24U);
+  r -= (int64_t)cs;
+  r -= (int64_t)canfdi_mul_s32_qn(c->friction_nom_q16, s_q16, 16U);
+  r_q16 = canfdi_sat_s64_to_s32(r);
+  r_q16 = canfdi_clamp_s32(r_q16, -FAST_TQ_MAX_Q16, FAST_TQ_MAX_Q16);
+  e->f_cc_q32 = ew_q32(e->f_cc_q32, (int64_t)cs * cs, sh);
+  e->f_cs_q32 = ew_q32(e->f_cs_q32, (int64_t)cs * s_q16, sh);
+  e->f_ss_q32 = ew_q32(e->f_ss_q32, (int64_t)s_q16 * s_q16, sh);
+  e->f_cr_q32 = ew_q32(e->f_cr_q32, (int64_t)cs * r_q16, sh);
+  e->f_sr_q32 = ew_q32(e->f_sr_q32, (int64_t)s_q16 * r_q16, sh);
+  e->f_n = (e->f_n < UINT16_MAX) ? (uint16_t)(e->f_n + 1U) : e->f_n;
+  e->f_age = 0U;
+  e->diag.fast_updates += 1U;
+  {
+    /* Q32 -> Q24: |c|, |r| <= 16 N m, |s| <= 1: every product < 2^61 */
+    const int64_t cc = canfdi_asr64_rnd(e->f_cc_q32, 8U);
+    const int64_t cx = canfdi_asr64_rnd(e->f_cs_q32, 8U);
+    const int64_t ss = canfdi_asr64_rnd(e->f_ss_q32, 8U);
+    const int64_t cr = canfdi_asr64_rnd(e->f_cr_q32, 8U);
+    const int64_t sr = canfdi_asr64_rnd(e->f_sr_q32, 8U);
+    const int64_t ccss = canfdi_asr64_rnd(cc * ss, 16U); /* Q32 */
+    const int64_t det = canfdi_sub_s64_sat(ccss, canfdi_asr64_rnd(cx * cx, 16U)); /* Q32 */
+    e->f_sep = (ccss > 0) && (det > 0) &&
+               (det >= canfdi_asr64_rnd(ccss * (int64_t)c->fast_sep_min_q16, 16U));
+    if (e->f_sep) {
+      const int64_t an = canfdi_sub_s64_sat(ss * cr, cx * sr); /* Q48 */
+      const int64_t bn = canfdi_sub_s64_sat(cc * sr, cx * cr);
+      /* Q48 / Q32 = Q16 */
+      const int32_t b_q16 = canfdi_sat_s64_to_s32(bn / det);
+      e->f_spring_dev_q16 = canfdi_sat_s64_to_s32(an / det);
+      e->f_fric_dev_q16 = (c->friction_nom_q16 > 0) ? canfdi_div_s32_qn(b_q16, c->friction_nom_q16, 16U) : 0;
+    }
+  }
 }
 
 static void rls_cfg_common(canfdi_rls_cfg_t *rc, const canfdi_est_thr_cfg_t *cfg, uint8_t n)
@@ -78,7 +140,8 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
   int32_t out = -CANFDI_EINVAL;
   if ((e != NULL) && (cfg != NULL) && (cfg->svf.order == 3U) && (cfg->decim >= 1U) && (cfg->decim <= 100U) &&
       (cfg->k_nom_q16 > 0) && (cfg->sign_band_q16 >= 0) && (cfg->limp_band_q16 >= 0) && (cfg->i_limit_q16 >= 0) &&
-      (cfg->holdoff_steps >= 1U) && (cfg->holdoff_steps <= 1000U)) {
+      (cfg->holdoff_steps >= 1U) && (cfg->holdoff_steps <= 1000U) && (cfg->fast_shift >= 1U) &&
+      (cfg->fast_shift <= 12U) && (cfg->fast_sep_min_q16 >= 0) && (cfg->fast_sep_min_q16 <= ONE_Q16)) {
     canfdi_rls_cfg_t re;
     canfdi_rls_cfg_t rm;
     rls_cfg_common(&re, cfg, 4U);
@@ -110,6 +173,7 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
       e->diag.mech_still_skips = 0U;
       e->diag.clip_skips = 0U;
       e->diag.resets = 0U;
+      e->diag.fast_updates = 0U;
       canfdi_est_thr_reset(e, false);
       e->diag.resets = 0U;
       out = CANFDI_OK;
@@ -133,6 +197,16 @@ void canfdi_est_thr_reset(canfdi_est_thr_t *e, bool keep_theta)
   e->last_dir = 0;
   e->el_since_reset = 0U;
   e->mech_since_reset = 0U;
+  e->f_cc_q32 = 0;
+  e->f_cs_q32 = 0;
+  e->f_ss_q32 = 0;
+  e->f_cr_q32 = 0;
+  e->f_sr_q32 = 0;
+  e->f_spring_dev_q16 = 0;
+  e->f_fric_dev_q16 = 0;
+  e->f_n = 0U;
+  e->f_age = UINT16_MAX;
+  e->f_sep = false;
   e->diag.resets += 1U;
 }
 
@@ -178,6 +252,7 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
     canfdi_svf_step(&e->svf_i, i_q16);
     canfdi_svf_step(&e->svf_a, angle_q16);
     canfdi_svf_step(&e->svf_s, s);
+    e->f_age = (e->f_age < UINT16_MAX) ? (uint16_t)(e->f_age + 1U) : e->f_age;
     e->phase = (uint8_t)(e->phase + 1U);
     if (e->phase >= e->cfg.decim) {
       e->phase = 0U;
@@ -207,6 +282,8 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
         e->diag.mech_still_skips += 1U;
       } else {
         int32_t phi[5];
+        fast_update(e, canfdi_svf_y_q16(&e->svf_i), a, canfdi_svf_dy_q16(&e->svf_a),
+                    canfdi_svf_d2y_q16(&e->svf_a), canfdi_svf_y_q16(&e->svf_s));
         phi[0] = canfdi_svf_d2y_q16(&e->svf_a);
         phi[1] = canfdi_svf_dy_q16(&e->svf_a);
         phi[2] = a;
@@ -273,6 +350,21 @@ int32_t canfdi_est_thr_pretension_q16(const canfdi_est_thr_t *e)
 int32_t canfdi_est_thr_friction_q16(const canfdi_est_thr_t *e)
 {
   return canfdi_mul_s32_qn(k_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 4U, 16U), 16U);
+}
+
+int32_t canfdi_est_thr_fast_spring_dev_q16(const canfdi_est_thr_t *e)
+{
+  return e->f_spring_dev_q16;
+}
+
+int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e)
+{
+  return e->f_fric_dev_q16;
+}
+
+bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e)
+{
+  return e->f_sep && (e->f_n >= e->cfg.fast_min_updates) && (e->f_age <= e->cfg.fast_stale_steps);
 }
 
 bool canfdi_est_thr_excited(const canfdi_est_thr_t *e)

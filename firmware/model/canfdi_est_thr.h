@@ -44,6 +44,47 @@
  * sustained motion: e.g. a slow sine of the angle setpoint over a wide
  * range (the spring torque changes by only k_s * 1.2 rad ~ 0.1 N m over
  * the stroke, against T_c ~ 0.28 N m).
+ * Fast mechanical test. The 5-parameter RLS needs ~10 s of memory to tell
+ * k_s, P and T_c apart (the spring torque changes by ~0.1 N m over the
+ * stroke only), so a weak spring or a doubled friction was isolated only
+ * 1.6-2.8 s after the fault. With the nominal parameters known, only the
+ * two fault directions are estimated, on the same gated samples as the
+ * mechanical RLS (moving one way, away from limp-home, no clipping):
+ *   r = K i - J theta'' - B theta' - c - T_c s,
+ *   c = k_s (theta - theta_LH) + P            (nominal spring torque)
+ *   r ~ a c + b s:  a = relative spring deviation (k_s and P scale
+ *   together when the spring weakens), b = T_c deviation (N m).
+ * Least squares on exponentially weighted means (weight 2^-fast_shift per
+ * update; shift 6 at ~200 updates/s is a ~0.3 s memory, about half the
+ * 2 Hz excitation's 0.5 s period): m_xy += (x y - m_xy) 2^-shift, then
+ *   det = m_cc m_ss - m_cs^2,  a = (m_ss m_cr - m_cs m_sr) / det,
+ *   b = (m_cc m_sr - m_cs m_cr) / det.
+ * c is ~0.4 N m and nearly constant, s is +-1: the two are separable once
+ * the window holds motion in both directions, which det / (m_cc m_ss)
+ * = 1 - corr(c, s)^2 measures (fast_sep_min). Valid after fast_min_updates
+ * updates, while separable and within fast_stale_steps of the last update
+ * (a valve that stopped moving keeps no stale verdict).
+ * Why this is fast: the fault enters r at once and fully (a step of a c
+ * or b s), and the two-regressor solution follows the EW mean with its
+ * ~0.3 s memory, instead of waiting for a 5-parameter RLS to re-separate
+ * k_s, P and T_c from the slow spring-torque variation.
+ * Spread and thresholds: a and b err by the relative error of K (K i) and
+ * of the nominal spring and friction (datasheet class, ~5 % each), plus
+ * the J theta'' and B theta' terms (uncorrelated with s and c over a
+ * period), plus noise (0.01 A current noise x K = 4 mN m, averaged over
+ * ~100 updates); the TPS noise through the SVF's theta'' (J theta'') and
+ * the closed loop's reaction to it dominate. Measured (tests/unit/
+ * test_est_thr.c, reference controller, 25 deg +- 3 deg at 2 Hz): fault-free
+ * spring -0.001 (sd 0.005), friction -0.014 (sd 0.010); spring -30 % / -10 %
+ * read -0.299 / -0.099, friction x2 / +20 % +1.009 / +0.190, 70 % of the
+ * fault reached 0.26-0.29 s after the step. In the application (SIL, its
+ * controller and the vehicle's +-8 deg sine on top) the spread is larger;
+ * the thresholds and their argument are in canfdi_diagnosis.c.
+ * Scaling and overflow: torques Q16.16 N m from Q24 x Q16.16 and Q16.16 x
+ * Q16.16 products with rounded shifts, summed in int64 and saturated to
+ * int32 and clamped to +-16 N m (4 x the largest torque of the valve,
+ * K x 10 A); the means are Q32 in int64; the solution reduces them to Q24
+ * (every product Q48 < 2^61 with |c|, |r| <= 16, |s| <= 1), det to Q32; a, b Q16.16 saturated; b / T_c by canfdi_div_s32_qn.
  * Sample alignment: as for the DC motor (canfdi_est_dcm.h), the measured
  * motor voltage is held over the step, so y = U_f + (T/2) dU_f/dt.
  * All four SVFs have the same configuration (order 3, so that theta'' is a
@@ -58,7 +99,9 @@
  * instructions per step with decim 2; worst-case step = 4 SVF + the
  * 5-parameter update ~ 1.9 k + 15.7 k = 17.6 k. Cortex-M0+ estimate ~30 k:
  * on a small M0+ raise decim (the memory 1/(forget rate) scales with it).
- * Memory: sizeof(canfdi_est_thr_t) = 1424 bytes on a 32-bit target.
+ * The fast test adds ~40 multiplies and 3 64-bit divisions per mechanical
+ * update. Memory: sizeof(canfdi_est_thr_t) = 1424 bytes (before the fast
+ * test; it adds ~70 bytes of state and configuration) on a 32-bit target.
  */
 #ifndef CANFDI_EST_THR_H
 #define CANFDI_EST_THR_H
@@ -106,6 +149,11 @@ typedef struct {
   int32_t pretension_nom_q16; /* N m */
   int32_t friction_nom_q16; /* N m */
   int32_t limp_home_q16;    /* theta_LH, rad */
+  /* fast structured test (see "Fast mechanical test" above) */
+  uint8_t fast_shift;       /* EW weight 2^-shift per mechanical update, 1..12 */
+  uint16_t fast_min_updates; /* updates before the deviations are valid */
+  int32_t fast_sep_min_q16; /* det / (m_cc m_ss) at or above: separable */
+  uint16_t fast_stale_steps; /* valid only within this many steps of an update */
 } canfdi_est_thr_cfg_t;
 
 typedef struct {
@@ -116,6 +164,7 @@ typedef struct {
   uint32_t mech_still_skips; /* mechanical updates skipped: not moving steadily */
   uint32_t clip_skips;     /* updates skipped after a clipped current sample */
   uint32_t resets;
+  uint32_t fast_updates;   /* updates of the fast structured test */
 } canfdi_est_thr_diag_t;
 
 typedef struct {
@@ -133,6 +182,17 @@ typedef struct {
   int8_t last_dir;
   uint32_t el_since_reset;
   uint32_t mech_since_reset;
+  /* fast structured test: EW means, Q32 (c, s, r of the header) */
+  int64_t f_cc_q32;
+  int64_t f_cs_q32;
+  int64_t f_ss_q32;
+  int64_t f_cr_q32;
+  int64_t f_sr_q32;
+  int32_t f_spring_dev_q16; /* last solution */
+  int32_t f_fric_dev_q16;
+  uint16_t f_n;             /* updates since reset (saturating) */
+  uint16_t f_age;           /* steps since the last update (saturating) */
+  bool f_sep;               /* last solution separable */
   canfdi_est_thr_diag_t diag;
 } canfdi_est_thr_t;
 
@@ -170,6 +230,13 @@ int32_t canfdi_est_thr_b_q24(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_spring_q24(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_pretension_q16(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_friction_q16(const canfdi_est_thr_t *e);
+
+/* Fast structured test: relative deviation of the spring torque
+ * (k_s, P together; -0.3 = 30 % weaker) and of the Coulomb friction
+ * (+1.0 = doubled), Q16.16; meaningful while canfdi_est_thr_fast_valid. */
+int32_t canfdi_est_thr_fast_spring_dev_q16(const canfdi_est_thr_t *e);
+int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e);
+bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e);
 
 bool canfdi_est_thr_excited(const canfdi_est_thr_t *e);
 bool canfdi_est_thr_el_converged(const canfdi_est_thr_t *e);

@@ -33,14 +33,14 @@ TABLE = Path(os.environ.get("CANFDI_SYMPTOMS_JSON", ROOT / "build" / "bench" / "
 
 DCM_CH = ["r1", "r2", "r3", "r4", "est_dcm.R_A", "est_dcm.Psi", "est_dcm.J", "est_dcm.M_c",
           "JPSI", "command_vs_measured_ua"]
-# The spring channel carries the pretension estimate P (the header of
-# canfdi_diagnosis explains why not k_s), the friction channel the Coulomb
-# friction T_c.
-THR_CH = ["corr", "arm", "pos1", "pos2", "est_thr.R", "est_thr.K", "est_thr.P", "est_thr.T_c",
-          None, None]
+# The spring and friction channels carry the fast structured test of
+# canfdi_est_thr (spring-torque and Coulomb-friction deviations, expressed in
+# the bench as P_nom (1 + a) and T_c,nom (1 + dev)), as the application does.
+THR_CH = ["corr", "arm", "pos1", "pos2", "est_thr.R", "est_thr.K", "est_thr.fast_P",
+          "est_thr.fast_T_c", None, None]
 PAR_NAME = {"est_dcm.R_A": ("dcm", "RA"), "est_dcm.Psi": ("dcm", "PSI"), "est_dcm.J": ("dcm", "J"),
             "est_dcm.M_c": ("dcm", "FRICTION"), "est_thr.R": ("thr", "R"), "est_thr.K": ("thr", "K"),
-            "est_thr.P": ("thr", "SPRING"), "est_thr.T_c": ("thr", "FRICTION")}
+            "est_thr.fast_P": ("thr", "SPRING"), "est_thr.fast_T_c": ("thr", "FRICTION")}
 
 
 def _fault_ids() -> dict[str, int]:

@@ -401,8 +401,18 @@ static int judge_state(const canfdi_sim_expect_t *e, char *msg, size_t cap)
     bits_text(e->st_mask, st, got, sizeof got);
     bits_text(e->st_mask, e->st_value, want, sizeof want);
     ok = ((st & e->st_mask) == e->st_value) ? 1 : 0;
-    (void)snprintf(msg, cap, "dtc_status %s at %.3f s: %s (expected %s) [0x%02X %s]", e->arg1, e->t_s,
+    /* formatted whole (at most ~540 bytes by gcc's count), then cut to cap:
+     * -O2's -Wformat-truncation rejects a direct snprintf into cap */
+    char whole[640];
+    size_t n;
+    (void)snprintf(whole, sizeof whole, "dtc_status %s at %.3f s: %s (expected %s) [0x%02X %s]", e->arg1, e->t_s,
                    got, want, (unsigned)st, src);
+    n = strlen(whole);
+    if ((cap > 0U) && (msg != NULL)) {
+      n = (n < cap) ? n : (cap - 1U);
+      (void)memcpy(msg, whole, n);
+      msg[n] = '\0';
+    }
   } else if (strcmp(e->kind, "occurrence") == 0) {
     const unsigned occ = (s != NULL) ? s->occurrence : 0U;
     ok = ((unsigned)llround(e->lo) == occ) ? 1 : 0;

@@ -382,6 +382,9 @@ static void guard_est_thr(void)
   sink32(canfdi_est_thr_spring_q24(&est));
   sink32(canfdi_est_thr_pretension_q16(&est));
   sink32(canfdi_est_thr_friction_q16(&est));
+  sink32(canfdi_est_thr_fast_spring_dev_q16(&est));
+  sink32(canfdi_est_thr_fast_friction_dev_q16(&est));
+  sink32(canfdi_est_thr_fast_valid(&est) ? 1 : 0);
   sink32(canfdi_est_thr_excited(&est) ? 1 : 0);
   sink32(canfdi_est_thr_el_converged(&est) ? 1 : 0);
   sink32(canfdi_est_thr_mech_converged(&est) ? 1 : 0);

@@ -247,6 +247,14 @@ START_TEST(test_cfg)
   c.k_nom_q16 = 0;
   ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &c), -CANFDI_EINVAL);
   canfdi_est_thr_default_cfg(&c);
+  c.fast_shift = 0U;
+  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &c), -CANFDI_EINVAL);
+  c.fast_shift = 13U;
+  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &c), -CANFDI_EINVAL);
+  canfdi_est_thr_default_cfg(&c);
+  c.fast_sep_min_q16 = 65537;
+  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &c), -CANFDI_EINVAL);
+  canfdi_est_thr_default_cfg(&c);
   ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &c), CANFDI_OK);
   /* nominal read-back (conversions through theta / K and back) */
   ck_assert_int_eq(canfdi_est_thr_r_q16(&rig.est), c.r_nom_q16);
@@ -257,6 +265,10 @@ START_TEST(test_cfg)
   CHECK(abs(canfdi_est_thr_j_q24(&rig.est) - c.j_nom_q24) <= 4);
   CHECK(abs(canfdi_est_thr_b_q24(&rig.est) - c.b_nom_q24) <= 4);
   CHECK(!canfdi_est_thr_excited(&rig.est));
+  /* the fast test starts invalid at zero deviation */
+  CHECK(!canfdi_est_thr_fast_valid(&rig.est));
+  ck_assert_int_eq(canfdi_est_thr_fast_spring_dev_q16(&rig.est), 0);
+  ck_assert_int_eq(canfdi_est_thr_fast_friction_dev_q16(&rig.est), 0);
   /* near limp-home the mechanical update is gated out */
   {
     int k;
@@ -266,6 +278,106 @@ START_TEST(test_cfg)
     ck_assert_uint_gt(canfdi_est_thr_diag(&rig.est)->mech_lh_skips + canfdi_est_thr_diag(&rig.est)->clip_skips, 0U);
     ck_assert_uint_eq(canfdi_est_thr_diag(&rig.est)->mech_updates, 0U);
   }
+}
+END_TEST
+
+/*
+ * Fast structured test (canfdi_est_thr.h, "Fast mechanical test"). Rig: the
+ * application's operating point (25 deg) and throttle excitation (+-3 deg
+ * sine at 2 Hz), the same noise; fault abrupt at 5 s. Expected before
+ * measuring, from the physics: the spring deviation reads the spring
+ * factor, the friction deviation the friction factor, each at 70 % of the
+ * fault within 1 s of the step, the other one staying near 0; fault-free both well inside the
+ * diagnosis thresholds (spring -10 % / +20 %, friction +8 % / -30 %).
+ * Tolerances on the mean over 6..10 s: 0.05 absolute on the spring, 15 %
+ * of the magnitude (at least 0.06) on the friction (the closed loop's
+ * reaction to TPS noise biases it by ~-0.07, see canfdi_diagnosis.c).
+ */
+typedef struct {
+  const char *fault;
+  double mag;
+  double spring_exp;
+  double fric_exp;
+} fast_case_t;
+
+static const fast_case_t fast_cases[] = {
+    {NULL, 0.0, 0.0, 0.0},
+    {"thr_spring_weak", 0.3, -0.3, 0.0},
+    {"thr_spring_weak", 0.1, -0.1, 0.0},
+    {"thr_friction_up", 1.0, 0.0, 1.0},
+    {"thr_friction_up", 0.2, 0.0, 0.2},
+};
+
+START_TEST(test_fast)
+{
+  const fast_case_t *fc = &fast_cases[_i];
+  canfdi_sim_refctl_cfg_t rc;
+  canfdi_est_thr_cfg_t ec;
+  stat_t ssp = {0, 0, 0};
+  stat_t sfr = {0, 0, 0};
+  double t_det = -1.0;
+  long n_valid = 0;
+  long n_after = 0;
+  canfdi_sim_default_cfg(&rig.cfg);
+  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS1] = 0.003;
+  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS2] = 0.003;
+  rig.cfg.sigma[CANFDI_SIM_S_THR_I] = 0.01;
+  rig.cfg.sigma[CANFDI_SIM_S_THR_SUPPLY] = 0.01;
+  rig.cfg.seed = 7U + (uint64_t)_i;
+  ck_assert_int_eq(canfdi_sim_init(&rig.sim, &rig.cfg), CANFDI_OK);
+  canfdi_sim_refctl_default(&rc, &rig.cfg);
+  canfdi_sim_refctl_init(&rig.ctl, &rc);
+  canfdi_sim_profile_init(&rig.angle, 0.0, 90.0);
+  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_CONST, 0, 0, 25.0, 0, 0), CANFDI_OK);
+  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_SINE, 0.5, 1e4, 3.0, 2.0, 0), CANFDI_OK);
+  if (fc->fault != NULL) {
+    canfdi_sim_fault_spec_t fs;
+    const int id = canfdi_sim_fault_find(fc->fault);
+    ck_assert_int_ge(id, 0);
+    ck_assert_int_eq(canfdi_sim_fault_spec_make(&fs, (uint8_t)id, CANFDI_SIM_MODE_ABRUPT, 5.0, fc->mag, 0, 0, 0),
+                     CANFDI_OK);
+    ck_assert_int_eq(canfdi_sim_add_fault(&rig.sim, &fs), CANFDI_OK);
+  }
+  canfdi_est_thr_default_cfg(&ec);
+  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &ec), CANFDI_OK);
+  rig.k = 0;
+  while (rig.k < 10000) {
+    const double t = (double)(rig.k + 1) * 1e-3;
+    double sp;
+    double fr;
+    bool v;
+    rig_step();
+    sp = (double)canfdi_est_thr_fast_spring_dev_q16(&rig.est) / 65536.0;
+    fr = (double)canfdi_est_thr_fast_friction_dev_q16(&rig.est) / 65536.0;
+    v = canfdi_est_thr_fast_valid(&rig.est);
+    if (t >= 2.0) {
+      n_after++;
+      n_valid += v ? 1 : 0;
+    }
+    if (v && (t >= 2.0) && (t < 5.0)) {
+      /* fault-free: no symptom */
+      CHECK((sp > -0.1) && (sp < 0.2));
+      CHECK((fr > -0.3) && (fr < 0.08));
+    }
+    if (v && (t >= 5.0) && (t_det < 0.0) && (fc->fault != NULL) &&
+        (((fc->spring_exp < 0.0) && (sp <= 0.7 * fc->spring_exp)) || ((fc->fric_exp > 0.0) && (fr >= 0.7 * fc->fric_exp)))) {
+      t_det = t - 5.0;
+    }
+    if (v && (t >= 6.0)) {
+      st_add(&ssp, sp);
+      st_add(&sfr, fr);
+    }
+  }
+  SHOW("fast %s %.1f: valid %.0f %% of the steps after 2 s; first at 70 %% of the fault %.3f s after the step; "
+       "mean 6..10 s spring %+.3f (sd %.3f) friction %+.3f (sd %.3f)\n",
+       (fc->fault != NULL) ? fc->fault : "none", fc->mag, 100.0 * (double)n_valid / (double)n_after, t_det,
+       st_mean(&ssp), st_sd(&ssp), st_mean(&sfr), st_sd(&sfr));
+  CHECK(n_valid * 2 > n_after);
+  if (fc->fault != NULL) {
+    CHECK((t_det >= 0.0) && (t_det < 1.0));
+  }
+  CHECK(fabs(st_mean(&ssp) - fc->spring_exp) <= 0.05);
+  CHECK(fabs(st_mean(&sfr) - fc->fric_exp) <= fmax(0.06, 0.15 * fc->fric_exp));
 }
 END_TEST
 
@@ -282,6 +394,11 @@ static Suite *make_suite(void)
   tcase_set_timeout(tc, 300);
   tcase_add_loop_test(tc, test_accuracy, 0, 3);
   tcase_add_loop_test(tc, test_hold_without_excitation, 0, 3);
+  suite_add_tcase(s, tc);
+
+  tc = tcase_create("fast_test");
+  tcase_set_timeout(tc, 120);
+  tcase_add_loop_test(tc, test_fast, 0, (int)(sizeof fast_cases / sizeof fast_cases[0]));
   suite_add_tcase(s, tc);
   return s;
 }
