@@ -66,15 +66,16 @@
  * (the M0+ code runs on the same emulated core: instruction counts, not
  * cycles):
  *                      min      mean     max
- *   Cortex-M4          29 900   43 700   70 700
- *   Cortex-M0+ code    52 800   82 900  131 900
+ *   Cortex-M4          30 500   51 700   75 600
+ *   Cortex-M0+ code    53 900   97 200  140 900
  * The model layer dominates (parity_dcm, parity_thr, est_dcm, est_thr: SVFs
- * every step, RLS updates decimated inside the modules); the max was seen
- * just after the limp-home transition of the demo (20.1..20.2 s).
+ * every step, RLS updates decimated inside the modules; the throttle's
+ * always-on excitation keeps its mechanical estimator and fast test busy);
+ * the max was seen at 5.7 s (M4) and 6.3 s (M0+) of the demo.
  * A 1 ms step therefore needs a Cortex-M4 of roughly 100 MHz or more with
  * margin; on a Cortex-M0+ at 48 MHz it does not fit (raise the estimators'
  * decim, or run them in a slower task). Host (x86-64, gcc -O2, callgrind):
- * 30..32 k instructions per step on average (`make sil-bench`). The same
+ * 35.6..37.5 k instructions per step on average (`make sil-bench`). The same
  * run shows the ECU's frames bit-identical between the host build and both
  * target builds.
  * Memory: sizeof(canfdi_app_t) = 9496 bytes on Cortex-M0+/M4 (~940 of them
