@@ -34,7 +34,7 @@ static const rule_t model_rules[] = {
   { CANFDI_FAULT_DCM_FLUX_DOWN,           COMP_DCM, 0U, "N++- 0N.. P0" },
   { CANFDI_FAULT_DCM_FRICTION_UP,         COMP_DCM, 0U, "ZPP+ 00.+ .0" },
   { CANFDI_FAULT_DCM_IA_SENSOR_OFFSET,    COMP_DCM, 1U, "NPPZ .... 00" },
-  { CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN,   COMP_DCM, 1U, "-.Z- 0-.. N0" },
+  { CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN,   COMP_DCM, 1U, "N.Z- 0-.. N0" },
   { CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, COMP_DCM, 1U, "-ZZ- 0N.. ZZ" },
   { CANFDI_FAULT_DCM_UA_SENSOR_OFFSET,    COMP_DCM, 1U, "+Z0+ 0+.. 0P" },
   /*  fault                                   comp      bi  CORR ARM POS1 POS2 R K spring friction */

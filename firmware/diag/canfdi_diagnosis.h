@@ -58,7 +58,7 @@
  *   2 dcm_flux_down     u   N  +  +  -  | 0  N   .  .  | P     0
  *   3 dcm_friction_up   u   Z  P  P  +  | 0  0   .  +  | .     0
  *   4 dcm_ia_offset     b   N  P  P  Z  | .  .   .  .  | 0     0
- *   5 dcm_speed_gain    b   -  .  Z  -  | 0  -   .  .  | N     0
+ *   5 dcm_speed_gain    b   N  .  Z  -  | 0  -   .  .  | N     0
  *   6 dcm_speed_offset  b   -  Z  Z  -  | 0  N   .  .  | Z     Z
  *   7 dcm_ua_offset     b   +  Z  0  +  | 0  +   .  .  | 0     P
  *   throttle           pol  CORR ARM POS1 POS2 | R  K  spring friction
@@ -95,6 +95,22 @@
  * (the offset enters r3 through the derivative terms), so it supports
  * instead of being necessary; the UAC channel (necessary) is what tells it
  * from the omega offset. SIL: P1A22 45-60 ms instead of 145 ms.
+ * Speed gain: r1 necessary, not only J/Psi. J/Psi is a derived channel of
+ * the mechanical estimator, and that estimator alone can move J: in the
+ * detection bench (fault_free_load_09, 10 h fault-free) the speed PRBS
+ * stepped into the 48 V clamp at 115 rad/s and 1.43 N m, the estimate read
+ * J -2.2 % with Psi -0.05 % and every residual in band, J/Psi -1.07 x its
+ * threshold for 25 ms, and with J/Psi the rule's only necessary entry the
+ * speed gain was the sole candidate (66 %): P1A21 confirmed. A real gain g
+ * also unbalances the armature equation (no load term, no load tracking):
+ * r1 = -Psi g w, 0.0065 w V when J/Psi (-g/(1+g)) reaches its 2 %
+ * threshold, i.e. >= 2.7 x the 0.12 V steady r1 band from 50 rad/s on and
+ * 5 x at 100 rad/s, and an abrupt change of that size freezes the R_A
+ * tracker (parity_dcm ra_gate). Limit: a gain drifting slower than the
+ * tracker (ra_tau 60 s) can be absorbed into R_A; it then stays
+ * "detected, not isolated" instead of P1A21. SIL: P1A21 for gain/offset
+ * 46-49 ms instead of 39-44 ms (the offset's fast report comes through
+ * this rule, J/Psi before Psi), incipient cases unchanged.
  * The throttle's spring and friction channels are the fast structured
  * test of canfdi_est_thr (nominal mechanical residual correlated with the
  * spring torque and the friction sign over ~0.3 s of motion in both
