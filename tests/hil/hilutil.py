@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import socket
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,17 +26,8 @@ ECU_IDS = {0x020, 0x021, 0x200, 0x201, 0x300, 0x301, 0x302, 0x310, 0x320, 0x321}
 
 def have_vcan(channel: str = CHANNEL) -> str | None:
     """None if `channel` is a usable SocketCAN interface, else why not."""
-    try:
-        s = socket.socket(socket.PF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
-    except OSError as e:
-        return f"no SocketCAN in this kernel ({e.strerror})"
-    try:
-        s.bind((channel,))
-    except OSError as e:
-        return f"cannot bind {channel}: {e.strerror}"
-    finally:
-        s.close()
-    return None
+    from canfdi.hil import vcan_unavailable
+    return vcan_unavailable(channel)
 
 
 @dataclass

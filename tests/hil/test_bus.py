@@ -22,6 +22,7 @@ DB = load_db()
 SELF_DIAG = DB.get_message_by_name("EcuSelfDiag")
 STATUS = DB.get_message_by_name("EcuStatus")
 DTC = DB.get_message_by_name("EcuDtc")
+STEP = DB.get_message_by_name("SimStep")
 NOMINAL = SCN / "nominal_setpoints.scn"
 
 
@@ -40,8 +41,8 @@ class Monitor(can.Listener):
         self.notifier = can.Notifier(self.bus, [self], timeout=0.1)
 
     def on_message_received(self, m: can.Message) -> None:
-        if m.arbitration_id == 0x611 and len(m.data) == 8:
-            self.step = int.from_bytes(bytes(m.data[:4]), "little")
+        if m.arbitration_id == STEP.frame_id and len(m.data) == 8:
+            self.step = int(STEP.decode(bytes(m.data))["SimStepIndex"])
         elif m.arbitration_id == 0x010:
             self.dcm = bytes(m.data)
 

@@ -12,7 +12,6 @@ import json
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -28,26 +27,14 @@ from lockstep_responder import Responder
 
 sys.path.insert(0, str(ROOT / "tools"))
 from canfdi.e2e import E2EReceiver, Status  # noqa: E402
+from canfdi.hil import vcan_unavailable  # noqa: E402
 
 CHANNEL = os.environ.get("CAN_CHANNEL", "vcan0")
 DCM, THR, SP_DCM, SP_THR, STATUS, STEP = 0x010, 0x011, 0x100, 0x101, 0x610, 0x611
 ACT_DCM, ACT_THR = 0x020, 0x021
 
 
-def _no_vcan_reason() -> str | None:
-    try:
-        socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW).close()
-    except (OSError, AttributeError) as e:
-        return (f"no SocketCAN in this kernel ({getattr(e, 'strerror', e)}); "
-                "run under tools/vcan-run")
-    try:
-        socket.if_nametoindex(CHANNEL)
-    except OSError:
-        return f"no {CHANNEL} interface; run under tools/vcan-run"
-    return None
-
-
-NO_VCAN = _no_vcan_reason()
+NO_VCAN = vcan_unavailable(CHANNEL)
 needs_vcan = pytest.mark.skipif(NO_VCAN is not None, reason=str(NO_VCAN))
 
 

@@ -32,6 +32,22 @@ RCVBUF_BYTES = 64 * 1024 * 1024
 SO_RCVBUFFORCE = getattr(socket, "SO_RCVBUFFORCE", 33)
 
 
+def vcan_unavailable(channel: str = "vcan0") -> str | None:
+    """None if `channel` is a usable SocketCAN interface here, else why not
+    (one line, ending with what to do). Used to skip or fail vcan tests."""
+    try:
+        s = socket.socket(socket.PF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
+    except (OSError, AttributeError) as e:
+        return f"no SocketCAN in this kernel ({getattr(e, 'strerror', e)}); run under tools/vcan-run"
+    try:
+        s.bind((channel,))
+    except OSError as e:
+        return f"cannot bind {channel}: {e.strerror}; run under tools/vcan-run"
+    finally:
+        s.close()
+    return None
+
+
 class ProcError(RuntimeError):
     """A program of the run failed; str() says which, how, and its last words."""
 
