@@ -27,7 +27,7 @@
 #include "detect/canfdi_limit.h"
 #include "detect/canfdi_meanvar.h"
 #include "detect/canfdi_trend.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 
 #define N_SAMPLES 100000U
 #define N_OPS 20000U

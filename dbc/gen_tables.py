@@ -8,7 +8,7 @@ Inputs (the single source of truth for faults and trouble codes):
 
 Outputs (committed; `make dbc-check` regenerates them and fails on any diff):
   host_sim/gen/canfdi_faults.{h,c}        strings and doubles, for the simulator
-  firmware/comm/gen/canfdi_catalogue.{h,c} integers only, for the firmware
+  firmware/catalogue/canfdi_catalogue.{h,c} integers only, for the firmware
   firmware/comm/gen/canfdi_raw_limits.h   raw [min, max] of every signal of up
                                           to 32 bits, from the DBC: what the
                                           firmware's plausibility check uses
@@ -163,7 +163,7 @@ def gen_host_h(faults: list[dict], dtcs: list[dict]) -> str:
            "/*",
            " * canfdi_faults.h - the fault-injection catalogue and trouble-code table",
            " * for host_sim and host tools (double precision and strings allowed here;",
-           " * the firmware uses firmware/comm/gen/canfdi_catalogue.h instead).",
+           " * the firmware uses firmware/catalogue/canfdi_catalogue.h instead).",
            " *",
            " * canfdi_fault_table[i].id == i for every i < canfdi_fault_table_len.",
            " * Magnitude semantics (see dbc/README.md): unit \"rel\" is a relative",
@@ -282,7 +282,7 @@ def gen_fw_h(faults: list[dict], dtcs: list[dict]) -> str:
 
 def gen_fw_c(faults: list[dict], dtcs: list[dict]) -> str:
     out = [f"/* {HEADER_NOTE} */",
-           '#include "comm/gen/canfdi_catalogue.h"',
+           '#include "catalogue/canfdi_catalogue.h"',
            "",
            "const canfdi_catalogue_fault_t canfdi_catalogue_fault[CANFDI_FAULT_COUNT] = {"]
     for f in faults:
@@ -545,8 +545,8 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     write(out / "host_sim/gen/canfdi_faults.h", gen_host_h(faults, dtcs))
     write(out / "host_sim/gen/canfdi_faults.c", gen_host_c(faults, dtcs))
-    write(out / "firmware/comm/gen/canfdi_catalogue.h", gen_fw_h(faults, dtcs))
-    write(out / "firmware/comm/gen/canfdi_catalogue.c", gen_fw_c(faults, dtcs))
+    write(out / "firmware/catalogue/canfdi_catalogue.h", gen_fw_h(faults, dtcs))
+    write(out / "firmware/catalogue/canfdi_catalogue.c", gen_fw_c(faults, dtcs))
     dbc = args.root / "dbc/canfdi.dbc"
     if dbc.exists():
         text = update_dbc(dbc.read_text(encoding="utf-8"), faults, dtcs)

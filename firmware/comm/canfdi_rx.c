@@ -3,7 +3,7 @@
  */
 #include "comm/canfdi_rx.h"
 
-#include "comm/gen/canfdi_catalogue.h"
+#include "catalogue/canfdi_catalogue.h"
 #include "comm/gen/canfdi_msg.h"
 #include "comm/gen/canfdi_raw_limits.h"
 #include "comm/gen/canfdi_sig_conv.h"

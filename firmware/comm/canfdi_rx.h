@@ -143,7 +143,7 @@
 
 #include "comm/canfdi_e2e.h"
 #include "core/canfdi_common.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 
 /* Supervised frames. */
 typedef enum {

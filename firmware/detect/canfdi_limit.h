@@ -46,7 +46,7 @@
 #define CANFDI_LIMIT_H
 
 #include "core/canfdi_common.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 
 /* Raw (hysteresis-latched, not debounced) symptom. */
 typedef enum {

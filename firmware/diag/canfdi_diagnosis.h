@@ -246,7 +246,7 @@
 #define CANFDI_DIAGNOSIS_H
 
 #include "core/canfdi_common.h"
-#include "comm/gen/canfdi_catalogue.h"
+#include "catalogue/canfdi_catalogue.h"
 #include "diag/canfdi_symptoms.h"
 
 #define CANFDI_DIAG_REPORT_FAILED ((int8_t)1)

@@ -176,9 +176,9 @@
 #ifndef CANFDI_DTC_H
 #define CANFDI_DTC_H
 
-#include "comm/gen/canfdi_catalogue.h"
+#include "catalogue/canfdi_catalogue.h"
 #include "core/canfdi_common.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 
 /* Largest table an instance can hold (1..254; indices are uint8_t, 0xFF
  * means "none"). RAM: 20 bytes per DTC. */

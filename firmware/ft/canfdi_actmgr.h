@@ -146,10 +146,10 @@
 #ifndef CANFDI_ACTMGR_H
 #define CANFDI_ACTMGR_H
 
-#include "comm/gen/canfdi_catalogue.h"
+#include "catalogue/canfdi_catalogue.h"
 #include "core/canfdi_common.h"
 #include "ctrl/canfdi_ctrl_mode.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 #include "ft/canfdi_degrade.h"
 #include "ft/canfdi_vote.h"
 

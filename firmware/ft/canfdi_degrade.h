@@ -3,7 +3,7 @@
  * throttle valve), a ratchet that only moves toward safety.
  *
  * States (the DBC's DegState value table, CANFDI_DEG_* of
- * comm/gen/canfdi_catalogue.h; a larger number is safer):
+ * catalogue/canfdi_catalogue.h; a larger number is safer):
  *   0 NORMAL       full function, full redundancy.
  *   1 DEGRADED     fail-operational: a redundant part is lost (bridge A,
  *                  one position sensor, the model vote) or a sensor is
@@ -70,7 +70,7 @@
 #ifndef CANFDI_DEGRADE_H
 #define CANFDI_DEGRADE_H
 
-#include "comm/gen/canfdi_catalogue.h"
+#include "catalogue/canfdi_catalogue.h"
 #include "core/canfdi_common.h"
 
 /* Transitions kept in the log ring (RAM: 8 bytes each). */

@@ -51,7 +51,7 @@
  * whether the angle may close the position loop; a SINGLE angle is given
  * for information and for the limp-home transition only.
  *
- * Isolation. Each source has a Dem-style debouncer (diag/canfdi_debounce.h)
+ * Isolation. Each source has a Dem-style debouncer (core/canfdi_debounce.h)
  * fed once per decided vote (THREE or TWO): PREFAILED for the outlier,
  * PREPASSED for the other available sources. In the ambiguous row (*1) and
  * in DISAGREE / SINGLE / INVALID nothing is reported (no evidence either
@@ -91,7 +91,7 @@
 #define CANFDI_VOTE_H
 
 #include "core/canfdi_common.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 
 #define CANFDI_VOTE_SRC_TPS1 0U
 #define CANFDI_VOTE_SRC_TPS2 1U

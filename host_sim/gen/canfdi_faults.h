@@ -2,7 +2,7 @@
 /*
  * canfdi_faults.h - the fault-injection catalogue and trouble-code table
  * for host_sim and host tools (double precision and strings allowed here;
- * the firmware uses firmware/comm/gen/canfdi_catalogue.h instead).
+ * the firmware uses firmware/catalogue/canfdi_catalogue.h instead).
  *
  * canfdi_fault_table[i].id == i for every i < canfdi_fault_table_len.
  * Magnitude semantics (see dbc/README.md): unit "rel" is a relative

@@ -85,7 +85,7 @@ def test_standard_codes_where_they_exist():
 
 
 def test_generated_defines_match_csv():
-    for path in ("host_sim/gen/canfdi_faults.h", "firmware/comm/gen/canfdi_catalogue.h"):
+    for path in ("host_sim/gen/canfdi_faults.h", "firmware/catalogue/canfdi_catalogue.h"):
         text = (ROOT / path).read_text()
         ids = {m[1]: int(m[2]) for m in re.finditer(r"#define CANFDI_FAULT_(\w+)\s+(\d+)U", text)}
         assert {k: v for k, v in ids.items() if k != "COUNT"} == \

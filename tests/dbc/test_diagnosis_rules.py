@@ -28,7 +28,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 SRC = ROOT / "firmware" / "diag" / "canfdi_diagnosis.c"
-CAT = ROOT / "firmware" / "comm" / "gen" / "canfdi_catalogue.h"
+CAT = ROOT / "firmware" / "catalogue" / "canfdi_catalogue.h"
 TABLE = Path(os.environ.get("CANFDI_SYMPTOMS_JSON", ROOT / "build" / "bench" / "symptoms.json"))
 
 DCM_CH = ["r1", "r2", "r3", "r4", "est_dcm.R_A", "est_dcm.Psi", "est_dcm.J", "est_dcm.M_c",

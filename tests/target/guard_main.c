@@ -22,13 +22,15 @@
 #include "comm/canfdi_e2e.h"
 #include "comm/canfdi_rx.h"
 #include "comm/canfdi_tx.h"
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_qconst.h"
 #include "detect/canfdi_adapt.h"
 #include "detect/canfdi_cusum.h"
 #include "detect/canfdi_limit.h"
 #include "detect/canfdi_meanvar.h"
 #include "detect/canfdi_trend.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 #include "diag/canfdi_dtc.h"
 #include "diag/canfdi_nvm.h"
 #include "model/canfdi_svf.h"
@@ -122,6 +124,19 @@ static void guard_fixp(void)
   sinku64(canfdi_isqrt_u64(in_u64));
   sink32(canfdi_q15_sqrt(a15));
   sink32(canfdi_q31_sqrt(a));
+}
+
+static void guard_count(void)
+{
+  static uint32_t c32;
+  static uint16_t c16;
+  static uint8_t c8;
+  canfdi_count_inc(&c32);
+  canfdi_count_add(&c32, in_u32);
+  sinku64(canfdi_count_sum(c32, in_u32));
+  canfdi_count_inc16(&c16);
+  canfdi_count_inc8(&c8);
+  sinku64((uint64_t)c16 + (uint64_t)c8);
 }
 
 static void guard_debounce(void)
@@ -800,6 +815,7 @@ static void guard_diagnosis(void)
 int main(void)
 {
   guard_fixp();
+  guard_count();
   guard_debounce();
   guard_meanvar();
   guard_cusum();

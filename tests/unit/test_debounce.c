@@ -1,5 +1,5 @@
 /*
- * test_debounce.c — unit tests of firmware/diag/canfdi_debounce.
+ * test_debounce.c — unit tests of firmware/core/canfdi_debounce.
  *
  * Expected step counts are derived from the counting rule in the header
  * (ceil(distance / step)), not copied from a run; a small reference model
@@ -9,7 +9,7 @@
 #include <limits.h>
 #include <stdint.h>
 
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 #include "unit_main.h"
 
 static int32_t ceil_div(int32_t a, int32_t b)

@@ -18,7 +18,7 @@
 #include "gen/canfdi_sim_msg.h"
 #include "comm/canfdi_e2e.h"
 #include "comm/canfdi_tx.h"
-#include "comm/gen/canfdi_catalogue.h"
+#include "catalogue/canfdi_catalogue.h"
 #include "comm/gen/canfdi_msg.h"
 #include "comm/gen/canfdi_raw_limits.h"
 #include "comm/gen/canfdi_sig_conv.h"

@@ -36,7 +36,7 @@
 #include "detect/canfdi_limit.h"
 #include "detect/canfdi_meanvar.h"
 #include "detect/canfdi_trend.h"
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 
 #define N_SAMPLES 8000U /* 8 s at 1 ms */
 #define T_S 0.001

@@ -1,7 +1,7 @@
 /*
  * canfdi_debounce.c — counter-based debouncing; the manual is the header.
  */
-#include "diag/canfdi_debounce.h"
+#include "core/canfdi_debounce.h"
 
 static uint16_t inc_sat_u16(uint16_t c)
 {
