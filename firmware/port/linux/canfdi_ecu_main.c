@@ -305,9 +305,12 @@ static void handle_frame(const canfdi_socketcan_frame_t *f, int64_t now)
     if (f->dlc != CANFDI_MSG_SIM_STEP_LENGTH) {
       ecu.simstep_bad_length++;
     } else if (ecu.lockstep) {
-      const uint32_t k = (uint32_t)f->data[0] | ((uint32_t)f->data[1] << 8) |
-                         ((uint32_t)f->data[2] << 16) | ((uint32_t)f->data[3] << 24);
-      lockstep_step(k);
+      struct canfdi_msg_sim_step_t m;
+      if (canfdi_msg_sim_step_unpack(&m, f->data, f->dlc) == 0) {
+        lockstep_step(m.sim_step_index);
+      } else {
+        ecu.simstep_bad_length++;
+      }
     } else {
       if ((ecu.simstep_ignored == 0U) && !ecu.quiet) {
         fprintf(stderr, PROG ": SimStep frames on %s but this ECU runs in realtime mode "
