@@ -4,6 +4,8 @@
  */
 #include "comm/canfdi_e2e.h"
 
+#include "core/canfdi_count.h"
+
 #define CRC8_POLY 0x1DU
 
 #if CANFDI_CFG_E2E_CRC_TABLE
@@ -105,11 +107,6 @@ int canfdi_e2e_rx_init(canfdi_e2e_rx_t *rx, uint16_t data_id, uint8_t max_delta)
   return out;
 }
 
-static void count_sat(uint32_t *c, uint32_t n)
-{
-  *c = (*c > (UINT32_MAX - n)) ? UINT32_MAX : (*c + n);
-}
-
 static canfdi_e2e_status_t judge(canfdi_e2e_rx_t *rx, const uint8_t *frame, size_t len)
 {
   canfdi_e2e_status_t st;
@@ -135,7 +132,7 @@ static canfdi_e2e_status_t judge(canfdi_e2e_rx_t *rx, const uint8_t *frame, size
     } else {
       st = (delta <= rx->max_delta) ? CANFDI_E2E_OK_SOME_LOST : CANFDI_E2E_WRONG_SEQUENCE;
       rx->lost = (uint8_t)(delta - 1U);
-      count_sat(&rx->diag.lost_frames, rx->lost);
+      canfdi_count_add(&rx->diag.lost_frames, rx->lost);
     }
     /* Also right for REPEATED, where counter == last_counter already. */
     rx->last_counter = counter;
@@ -149,7 +146,7 @@ int canfdi_e2e_check(canfdi_e2e_rx_t *rx, const uint8_t *frame, size_t len)
   int out = -CANFDI_EINVAL;
   if (rx != NULL) {
     const canfdi_e2e_status_t st = judge(rx, frame, len);
-    count_sat(&rx->diag.status[st], 1U);
+    canfdi_count_inc(&rx->diag.status[st]);
     out = (int)st;
   }
   return out;

@@ -7,6 +7,7 @@
 #include "comm/gen/canfdi_msg.h"
 #include "comm/gen/canfdi_raw_limits.h"
 #include "comm/gen/canfdi_sig_conv.h"
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 /* Monitors 0..9 follow the catalogue's comm faults; a reordered catalogue
@@ -97,13 +98,6 @@ static const input_info_t input_info[CANFDI_RX_IN_COUNT] = {
      (int32_t)CANFDI_RAW_SETPOINT_THR_SP_THR_ANGLE_MIN,
      (int32_t)CANFDI_RAW_SETPOINT_THR_SP_THR_ANGLE_MAX, CANFDI_RX_F_SP_THR},
 };
-
-static void count(uint32_t *c)
-{
-  if (*c < UINT32_MAX) {
-    (*c)++;
-  }
-}
 
 /* A failure in the same step dominates any pass of the same monitor. */
 static void report(canfdi_rx_t *rx, unsigned mon, bool failed)
@@ -203,7 +197,7 @@ static int judge_e2e(canfdi_rx_t *rx, unsigned f, const uint8_t *data, uint8_t d
   int out = CANFDI_RX_ACCEPTED;
   if (dlc != CANFDI_E2E_FRAME_LEN) {
     report(rx, fi->mon_length, true);
-    count(&rx->diag.length_err[f]);
+    canfdi_count_inc(&rx->diag.length_err[f]);
     fs->resync = true;
     out = CANFDI_RX_BAD_LENGTH;
   } else {
@@ -216,7 +210,7 @@ static int judge_e2e(canfdi_rx_t *rx, unsigned f, const uint8_t *data, uint8_t d
     st = canfdi_e2e_check(&rx->e2e[f], data, dlc);
     if (st == (int)CANFDI_E2E_WRONG_CRC) {
       report(rx, fi->mon_crc, true);
-      count(&rx->diag.crc_err[f]);
+      canfdi_count_inc(&rx->diag.crc_err[f]);
       fs->resync = true;
       out = CANFDI_RX_BAD_CRC;
     } else {
@@ -226,7 +220,7 @@ static int judge_e2e(canfdi_rx_t *rx, unsigned f, const uint8_t *data, uint8_t d
       } else {
         /* REPEATED or WRONG_SEQUENCE (length and data were checked above) */
         report(rx, fi->mon_counter, true);
-        count(&rx->diag.counter_err[f]);
+        canfdi_count_inc(&rx->diag.counter_err[f]);
         out = CANFDI_RX_BAD_COUNTER;
       }
     }
@@ -284,7 +278,7 @@ static int setpoint(canfdi_rx_t *rx, unsigned f, const uint8_t *data, uint8_t dl
   int out;
   if (dlc != 8U) {
     report(rx, fi->mon_length, true);
-    count(&rx->diag.length_err[f]);
+    canfdi_count_inc(&rx->diag.length_err[f]);
     frame_error(rx, f);
     out = CANFDI_RX_BAD_LENGTH;
   } else {
@@ -414,12 +408,12 @@ int canfdi_rx_frame(canfdi_rx_t *rx, uint32_t id, const uint8_t *data, uint8_t d
   int out = -CANFDI_EINVAL;
   if (usable(rx)) {
     if ((data == NULL) && (dlc > 0U)) {
-      count(&rx->diag.bad_args);
+      canfdi_count_inc(&rx->diag.bad_args);
     } else {
       const unsigned f = frame_of(id);
-      count(&rx->diag.frames);
+      canfdi_count_inc(&rx->diag.frames);
       if (f >= (unsigned)CANFDI_RX_F_COUNT) {
-        count(&rx->diag.unknown_id);
+        canfdi_count_inc(&rx->diag.unknown_id);
         out = CANFDI_RX_UNKNOWN_ID;
       } else {
         reception(rx, f, now_us);
@@ -431,9 +425,9 @@ int canfdi_rx_frame(canfdi_rx_t *rx, uint32_t id, const uint8_t *data, uint8_t d
           out = setpoint(rx, f, data, dlc, now_us);
         }
         if (out == CANFDI_RX_ACCEPTED) {
-          count(&rx->diag.accepted[f]);
+          canfdi_count_inc(&rx->diag.accepted[f]);
         } else if (out == CANFDI_RX_IMPLAUSIBLE) {
-          count(&rx->diag.implausible[f]);
+          canfdi_count_inc(&rx->diag.implausible[f]);
         } else {
           /* rejected: counted where judged */
         }
@@ -471,7 +465,7 @@ static void decide(canfdi_rx_t *rx, unsigned i, uint32_t now_us)
   } else if ((rx->estimate_mask & (UINT32_C(1) << i)) != 0U) {
     in->quality = (uint8_t)CANFDI_RX_SUBSTITUTED;
     in->value_q16 = rx->estimate_q16[i];
-    count(&rx->diag.estimates_used);
+    canfdi_count_inc(&rx->diag.estimates_used);
   } else if (s->has_value && !s->stale) {
     in->quality = (uint8_t)CANFDI_RX_SUBSTITUTED;
     in->value_q16 = s->last_q16;
@@ -480,9 +474,9 @@ static void decide(canfdi_rx_t *rx, unsigned i, uint32_t now_us)
     in->value_q16 = s->last_q16; /* the default until the first sample */
   }
   if (in->quality == (uint8_t)CANFDI_RX_SUBSTITUTED) {
-    count(&rx->diag.substituted[i]);
+    canfdi_count_inc(&rx->diag.substituted[i]);
   } else if (in->quality == (uint8_t)CANFDI_RX_INVALID) {
-    count(&rx->diag.invalid[i]);
+    canfdi_count_inc(&rx->diag.invalid[i]);
   } else {
     /* VALID */
   }
@@ -497,7 +491,7 @@ int canfdi_rx_step(canfdi_rx_t *rx, uint32_t now_us)
       canfdi_rx_frame_state_t *fs = &rx->frame[f];
       if (!fs->timed_out && (age_us(now_us, fs->last_rx_us) >= window_us(rx, f))) {
         fs->timed_out = true;
-        count(&rx->diag.timeouts[f]);
+        canfdi_count_inc(&rx->diag.timeouts[f]);
         frame_error(rx, f);
         if (f < CANFDI_RX_F_E2E_COUNT) {
           fs->resync = true;
@@ -514,7 +508,7 @@ int canfdi_rx_step(canfdi_rx_t *rx, uint32_t now_us)
     rx->report = rx->acc;
     rx->acc.prefailed = 0U;
     rx->acc.prepassed = 0U;
-    count(&rx->diag.steps);
+    canfdi_count_inc(&rx->diag.steps);
     out = CANFDI_OK;
   }
   return out;

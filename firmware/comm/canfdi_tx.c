@@ -6,6 +6,7 @@
 #include "comm/gen/canfdi_msg.h"
 #include "comm/gen/canfdi_raw_limits.h"
 #include "comm/gen/canfdi_sig_conv.h"
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 /* Period of a DBC cycle time in steps; must be a whole number of steps. */
@@ -109,13 +110,6 @@ static const conv_t conv[C_COUNT] = {
     CONV(ECU_PARAM_THR_PRM_THR_FRIC_V, ECU_PARAM_THR_PRM_THR_FRIC_V),
 };
 
-static void count(uint32_t *c)
-{
-  if (*c < UINT32_MAX) {
-    (*c)++;
-  }
-}
-
 /*
  * Scaling and overflow: see the header. Inside [min_q16, max_q16] the
  * generator bounds |v * inv_scale| + |offset_raw| below 2^62, so the int64_t
@@ -128,10 +122,10 @@ static int32_t to_raw(canfdi_tx_t *tx, unsigned c, int32_t v_q16)
   int32_t raw;
   if (v_q16 < k->min_q16) {
     raw = k->raw_min;
-    count(&tx->diag.saturations);
+    canfdi_count_inc(&tx->diag.saturations);
   } else if (v_q16 > k->max_q16) {
     raw = k->raw_max;
-    count(&tx->diag.saturations);
+    canfdi_count_inc(&tx->diag.saturations);
   } else {
     const int64_t acc = ((int64_t)v_q16 * k->inv_scale_q32) - k->offset_raw_q32;
     const int64_t r = canfdi_asr64_rnd(acc, 32U);
@@ -148,7 +142,7 @@ static uint32_t sat_u(canfdi_tx_t *tx, uint32_t v, uint32_t max)
   uint32_t out = v;
   if (v > max) {
     out = max;
-    count(&tx->diag.saturations);
+    canfdi_count_inc(&tx->diag.saturations);
   }
   return out;
 }
@@ -174,7 +168,7 @@ static bool args_ok(canfdi_tx_t *tx, const void *v, const canfdi_tx_frame_t *out
 {
   bool ok = usable(tx) && (v != NULL) && (out != NULL);
   if (!ok && usable(tx)) {
-    count(&tx->diag.bad_args);
+    canfdi_count_inc(&tx->diag.bad_args);
   }
   return ok;
 }
@@ -234,7 +228,7 @@ int canfdi_tx_encode_dcm_act(canfdi_tx_t *tx, const canfdi_tx_dcm_act_t *v, canf
       /* An unknown stage must not be driven: none, and disabled. */
       bridge = (uint8_t)CANFDI_MSG_DCM_ACTUATOR_DCM_BRIDGE_SEL_NONE_CHOICE;
       enable = false;
-      count(&tx->diag.invalid_enums);
+      canfdi_count_inc(&tx->diag.invalid_enums);
     }
     m.dcm_actuator_crc = 0U;
     m.dcm_actuator_counter = 0U;
@@ -244,7 +238,7 @@ int canfdi_tx_encode_dcm_act(canfdi_tx_t *tx, const canfdi_tx_dcm_act_t *v, canf
     frame_head(out, CANFDI_MSG_DCM_ACTUATOR_FRAME_ID, canfdi_msg_dcm_actuator_pack(out->data, &m, 8U));
     ret = canfdi_e2e_protect(&tx->e2e[0], out->data, 8U);
     CANFDI_ASSERT(ret == CANFDI_OK);
-    count(&tx->diag.frames[CANFDI_TX_F_DCM_ACT]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_DCM_ACT]);
   }
   return ret;
 }
@@ -261,7 +255,7 @@ int canfdi_tx_encode_thr_act(canfdi_tx_t *tx, const canfdi_tx_thr_act_t *v, canf
     frame_head(out, CANFDI_MSG_THR_ACTUATOR_FRAME_ID, canfdi_msg_thr_actuator_pack(out->data, &m, 8U));
     ret = canfdi_e2e_protect(&tx->e2e[1], out->data, 8U);
     CANFDI_ASSERT(ret == CANFDI_OK);
-    count(&tx->diag.frames[CANFDI_TX_F_THR_ACT]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_THR_ACT]);
   }
   return ret;
 }
@@ -277,7 +271,7 @@ int canfdi_tx_encode_res_dcm(canfdi_tx_t *tx, const canfdi_tx_res_dcm_t *v, canf
     m.res_dcm_r4 = raw_s16(to_raw(tx, C_RES_DCM_R4, v->r_q16[3]));
     frame_head(out, CANFDI_MSG_ECU_RESIDUAL_DCM_FRAME_ID,
                canfdi_msg_ecu_residual_dcm_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_RES_DCM]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_RES_DCM]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -294,7 +288,7 @@ int canfdi_tx_encode_res_thr(canfdi_tx_t *tx, const canfdi_tx_res_thr_t *v, canf
     m.res_thr_current = raw_s16(to_raw(tx, C_RES_THR_CURRENT, v->current_q16));
     frame_head(out, CANFDI_MSG_ECU_RESIDUAL_THR_FRAME_ID,
                canfdi_msg_ecu_residual_thr_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_RES_THR]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_RES_THR]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -323,7 +317,7 @@ int canfdi_tx_encode_status(canfdi_tx_t *tx, const canfdi_tx_status_t *v, canfdi
     m.sts_alive_counter = tx->alive;
     tx->alive = (uint8_t)((tx->alive + 1U) & CANFDI_RAW_ECU_STATUS_STS_ALIVE_COUNTER_MAX);
     frame_head(out, CANFDI_MSG_ECU_STATUS_FRAME_ID, canfdi_msg_ecu_status_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_STATUS]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_STATUS]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -346,7 +340,7 @@ int canfdi_tx_encode_diagnosis(canfdi_tx_t *tx, const canfdi_tx_diagnosis_t *v,
                                            CANFDI_RAW_ECU_DIAGNOSIS_DIAG_COM_CONFIDENCE_MAX);
     frame_head(out, CANFDI_MSG_ECU_DIAGNOSIS_FRAME_ID,
                canfdi_msg_ecu_diagnosis_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_DIAGNOSIS]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_DIAGNOSIS]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -370,7 +364,7 @@ int canfdi_tx_encode_self_diag(canfdi_tx_t *tx, const canfdi_tx_self_diag_t *v,
         tx, v->dtc_reports_rejected, CANFDI_RAW_ECU_SELF_DIAG_SDG_DTC_REPORTS_REJECTED_MAX);
     frame_head(out, CANFDI_MSG_ECU_SELF_DIAG_FRAME_ID,
                canfdi_msg_ecu_self_diag_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_SELF_DIAG]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_SELF_DIAG]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -398,7 +392,7 @@ int canfdi_tx_encode_dtc(canfdi_tx_t *tx, const canfdi_tx_dtc_t *v, bool change,
     m.dtc_count = v->count;
     m.dtc_tx_reason = change ? 1U : 0U;
     frame_head(out, CANFDI_MSG_ECU_DTC_FRAME_ID, canfdi_msg_ecu_dtc_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_DTC]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_DTC]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -418,7 +412,7 @@ int canfdi_tx_encode_prm_dcm(canfdi_tx_t *tx, const canfdi_tx_param_dcm_t *v,
     m.prm_dcm_valid = v->valid ? 1U : 0U;
     frame_head(out, CANFDI_MSG_ECU_PARAM_DCM_FRAME_ID,
                canfdi_msg_ecu_param_dcm_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_PRM_DCM]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_PRM_DCM]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -438,7 +432,7 @@ int canfdi_tx_encode_prm_thr(canfdi_tx_t *tx, const canfdi_tx_param_thr_t *v,
     m.prm_thr_valid = v->valid ? 1U : 0U;
     frame_head(out, CANFDI_MSG_ECU_PARAM_THR_FRAME_ID,
                canfdi_msg_ecu_param_thr_pack(out->data, &m, 8U));
-    count(&tx->diag.frames[CANFDI_TX_F_PRM_THR]);
+    canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_PRM_THR]);
     ret = CANFDI_OK;
   }
   return ret;
@@ -449,7 +443,7 @@ int canfdi_tx_dtc_event(canfdi_tx_t *tx, const canfdi_tx_dtc_t *rec)
   int ret = -CANFDI_EINVAL;
   if (usable(tx) && (rec != NULL)) {
     if (tx->q_len >= CANFDI_CFG_TX_DTC_QUEUE) {
-      count(&tx->diag.dtc_events_dropped);
+      canfdi_count_inc(&tx->diag.dtc_events_dropped);
       ret = -CANFDI_ERANGE;
     } else {
       const unsigned tail = ((unsigned)tx->q_head + tx->q_len) % CANFDI_CFG_TX_DTC_QUEUE;
@@ -458,7 +452,7 @@ int canfdi_tx_dtc_event(canfdi_tx_t *tx, const canfdi_tx_dtc_t *rec)
       ret = CANFDI_OK;
     }
   } else if (usable(tx)) {
-    count(&tx->diag.bad_args);
+    canfdi_count_inc(&tx->diag.bad_args);
   } else {
     /* nothing to count in */
   }
@@ -506,7 +500,7 @@ int canfdi_tx_step(canfdi_tx_t *tx, const canfdi_tx_data_t *data, canfdi_tx_fram
       failed += (canfdi_tx_encode_dtc(tx, &tx->queue[tx->q_head], true, &out[n++]) != CANFDI_OK) ? 1U : 0U;
       tx->q_head = (uint8_t)((tx->q_head + 1U) % CANFDI_CFG_TX_DTC_QUEUE);
       tx->q_len--;
-      count(&tx->diag.dtc_events);
+      canfdi_count_inc(&tx->diag.dtc_events);
     }
     CANFDI_ASSERT(failed == 0U); /* arguments checked above */
     CANFDI_ASSERT(n <= CANFDI_TX_MAX_FRAMES_PER_STEP); /* the phases guarantee it */
@@ -515,10 +509,10 @@ int canfdi_tx_step(canfdi_tx_t *tx, const canfdi_tx_data_t *data, canfdi_tx_fram
       tx->countdown[f] = (tx->countdown[f] == 0U) ? (uint8_t)(slots[f].period - 1U)
                                                   : (uint8_t)(tx->countdown[f] - 1U);
     }
-    count(&tx->diag.steps);
+    canfdi_count_inc(&tx->diag.steps);
     ret = (int)n;
   } else if (usable(tx)) {
-    count(&tx->diag.bad_args);
+    canfdi_count_inc(&tx->diag.bad_args);
   } else {
     /* nothing to count in */
   }

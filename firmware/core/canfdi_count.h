@@ -7,10 +7,12 @@
  * A wrapping counter would read as "nothing happened" after 2^32 events (49.7
  * days of 1 ms steps); a saturated one reads as "at least this many".
  *
- * Contract: counters are for diagnostics. No decision of the firmware may
- * depend on a counter's value (a saturated or wrapped counter would change
- * behaviour after weeks of operation); state that steers behaviour is kept
- * in state fields of its own with a stated range.
+ * Contract: a diagnostics counter is never read to take a decision (a
+ * saturated or wrapped counter would change behaviour after weeks of
+ * operation); state that steers behaviour is kept in state fields of its
+ * own with a stated range. State counters whose definition saturates (the
+ * DTC memory's occurrence and operation-cycle counters, ISO 14229-1) use
+ * the same helpers.
  *
  * Scaling and overflow: unsigned integers, no fixed-point format; every
  * function saturates at the type's maximum and never wraps. Cost: one

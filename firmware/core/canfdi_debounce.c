@@ -3,10 +3,7 @@
  */
 #include "core/canfdi_debounce.h"
 
-static uint16_t inc_sat_u16(uint16_t c)
-{
-  return (c < UINT16_MAX) ? (uint16_t)(c + 1U) : c;
-}
+#include "core/canfdi_count.h"
 
 static bool jump_value_ok(bool enabled, int16_t value, const canfdi_debounce_cfg_t *cfg)
 {
@@ -59,7 +56,7 @@ static void qualify(canfdi_debounce_t *d)
   const canfdi_debounce_cfg_t *cfg = d->cfg;
   if (d->counter >= cfg->failed_threshold) {
     if (d->status != (uint8_t)CANFDI_DEB_FAILED) {
-      d->diag.failed_qualifications = inc_sat_u16(d->diag.failed_qualifications);
+      canfdi_count_inc16(&d->diag.failed_qualifications);
     }
     d->status = (uint8_t)CANFDI_DEB_FAILED;
     d->test_failed = true;
@@ -67,7 +64,7 @@ static void qualify(canfdi_debounce_t *d)
     d->test_not_completed_this_cycle = false;
   } else if (d->counter <= cfg->passed_threshold) {
     if (d->status != (uint8_t)CANFDI_DEB_PASSED) {
-      d->diag.passed_qualifications = inc_sat_u16(d->diag.passed_qualifications);
+      canfdi_count_inc16(&d->diag.passed_qualifications);
     }
     d->status = (uint8_t)CANFDI_DEB_PASSED;
     d->test_failed = false;
@@ -120,7 +117,7 @@ int32_t canfdi_debounce_step(canfdi_debounce_t *d, canfdi_deb_report_t report)
       qualify(d);
       out = (int32_t)d->status;
     } else {
-      d->diag.rejected_reports = inc_sat_u16(d->diag.rejected_reports);
+      canfdi_count_inc16(&d->diag.rejected_reports);
     }
     CANFDI_ASSERT((d->counter >= cfg->passed_threshold) && (d->counter <= cfg->failed_threshold));
   }

@@ -3,6 +3,8 @@
  */
 #include "diag/canfdi_dtc.h"
 
+#include "core/canfdi_count.h"
+
 CANFDI_STATIC_ASSERT((CANFDI_CFG_DTC_MAX_DTCS >= 1) && (CANFDI_CFG_DTC_MAX_DTCS <= 254),
                      dtc_max_dtcs_in_range);
 CANFDI_STATIC_ASSERT((CANFDI_CFG_DTC_MAX_ENTRIES >= 1) && (CANFDI_CFG_DTC_MAX_ENTRIES <= 254),
@@ -93,16 +95,6 @@ const canfdi_dtc_def_t canfdi_dtc_defaults[CANFDI_DTC_COUNT] = {
 #undef COM
 
 /* ------------------------------------------------------------ helpers */
-
-static uint16_t inc_sat_u16(uint16_t c)
-{
-  return (c < UINT16_MAX) ? (uint16_t)(c + 1U) : c;
-}
-
-static uint8_t inc_sat_u8(uint8_t c)
-{
-  return (c < UINT8_MAX) ? (uint8_t)(c + 1U) : c;
-}
 
 static bool bound(const canfdi_dtc_t *m)
 {
@@ -196,7 +188,7 @@ static uint8_t alloc_entry(canfdi_dtc_t *m, uint8_t i)
   if (got == CANFDI_DTC_NONE) {
     const uint8_t p = m->table[i].priority;
     uint8_t victim = CANFDI_DTC_NONE;
-    m->diag.overflows = inc_sat_u16(m->diag.overflows);
+    canfdi_count_inc16(&m->diag.overflows);
     for (uint8_t e = 0U; e < (uint8_t)CANFDI_CFG_DTC_MAX_ENTRIES; e++) {
       const uint8_t owner = m->entry[e].dtc_index;
       const uint8_t po = m->table[owner].priority;
@@ -211,10 +203,10 @@ static uint8_t alloc_entry(canfdi_dtc_t *m, uint8_t i)
       canfdi_dtc_state_t *vs = &m->dtc[m->entry[victim].dtc_index];
       vs->status = (uint8_t)(vs->status & ~(CANFDI_DTC_ST_CDTC | CANFDI_DTC_ST_WIR));
       free_entry(m, victim);
-      m->diag.displacements = inc_sat_u16(m->diag.displacements);
+      canfdi_count_inc16(&m->diag.displacements);
       got = victim;
     } else {
-      m->diag.not_stored = inc_sat_u16(m->diag.not_stored);
+      canfdi_count_inc16(&m->diag.not_stored);
     }
   }
   if (got != CANFDI_DTC_NONE) {
@@ -244,7 +236,7 @@ static void on_failed(canfdi_dtc_t *m, uint8_t i, const canfdi_dtc_ff_t *ff)
                 CANFDI_DTC_ST_TFSLC);
   s = (uint8_t)(s & ~(CANFDI_DTC_ST_TNCSLC | CANFDI_DTC_ST_TNCTOC));
   if (first_in_cycle) {
-    st->failed_cycles = inc_sat_u8(st->failed_cycles);
+    canfdi_count_inc8(&st->failed_cycles);
   }
   if (st->healthy_cycles != 0U) {
     st->healthy_cycles = 0U;
@@ -265,7 +257,7 @@ static void on_failed(canfdi_dtc_t *m, uint8_t i, const canfdi_dtc_ff_t *ff)
       }
     }
   } else if (!was_failed) {
-    m->entry[st->entry].occurrence = inc_sat_u8(m->entry[st->entry].occurrence);
+    canfdi_count_inc8(&m->entry[st->entry].occurrence);
     m->changes++;
   } else {
     /* still failed: the same occurrence */
@@ -312,7 +304,7 @@ static void end_cycle(canfdi_dtc_t *m)
        * implies an entry); counting for the others would only churn the
        * NVM image. */
       if (st->entry != CANFDI_DTC_NONE) {
-        st->healthy_cycles = inc_sat_u8(st->healthy_cycles);
+        canfdi_count_inc8(&st->healthy_cycles);
         m->changes++;
         if (st->healthy_cycles >= def->heal_cycles) {
           s = (uint8_t)(s & ~CANFDI_DTC_ST_WIR);
@@ -321,7 +313,7 @@ static void end_cycle(canfdi_dtc_t *m)
           s = (uint8_t)(s & ~(CANFDI_DTC_ST_CDTC | CANFDI_DTC_ST_WIR));
           free_entry(m, st->entry);
           st->healthy_cycles = 0U;
-          m->diag.aged = inc_sat_u16(m->diag.aged);
+          canfdi_count_inc16(&m->diag.aged);
         }
       }
       if (s != s0) {
@@ -423,7 +415,7 @@ int32_t canfdi_dtc_report(canfdi_dtc_t *m, uint8_t index, canfdi_deb_report_t re
       }
       out = (int32_t)m->dtc[index].status;
     } else {
-      m->diag.rejected_reports = inc_sat_u16(m->diag.rejected_reports);
+      canfdi_count_inc16(&m->diag.rejected_reports);
     }
   }
   return out;
@@ -444,7 +436,7 @@ int32_t canfdi_dtc_clear(canfdi_dtc_t *m, uint32_t group_of_dtc)
       }
     }
     if (out == CANFDI_OK) {
-      m->diag.clears = inc_sat_u16(m->diag.clears);
+      canfdi_count_inc16(&m->diag.clears);
       m->changes++;
     }
   }
@@ -463,7 +455,7 @@ int32_t canfdi_dtc_clear_group(canfdi_dtc_t *m, uint8_t group)
       }
     }
     if (out > 0) {
-      m->diag.clears = inc_sat_u16(m->diag.clears);
+      canfdi_count_inc16(&m->diag.clears);
       m->changes++;
     }
   }
@@ -607,6 +599,16 @@ static uint32_t get_u32(const uint8_t *p)
   return ((uint32_t)p[0] << 24) | get_u24(p + 1);
 }
 
+static uint8_t *put_u64(uint8_t *p, uint64_t v)
+{
+  return put_u32(put_u32(p, (uint32_t)(v >> 32)), (uint32_t)(v & 0xFFFFFFFFU));
+}
+
+static uint64_t get_u64(const uint8_t *p)
+{
+  return ((uint64_t)get_u32(p) << 32) | (uint64_t)get_u32(p + 4);
+}
+
 static bool is_default_state(const canfdi_dtc_state_t *st)
 {
   return (st->status == (uint8_t)CANFDI_DTC_STATUS_CLEARED) && (st->failed_cycles == 0U) &&
@@ -655,7 +657,7 @@ int32_t canfdi_dtc_serialize(const canfdi_dtc_t *m, uint8_t *buf, uint32_t cap)
           *p++ = en->occurrence;
           p = put_u32(p, en->order);
           *p++ = en->ff_valid ? 1U : 0U;
-          p = put_u32(p, en->ff.time_ms);
+          p = put_u64(p, en->ff.time_ms);
           p = put_u32(p, s32_bits(en->ff.omega_q16));
           p = put_u32(p, s32_bits(en->ff.ia_q16));
           p = put_u32(p, s32_bits(en->ff.ua_q16));
@@ -689,19 +691,22 @@ static bool apply_image(canfdi_dtc_t *m, const uint8_t *buf, uint32_t len)
   bool ok = len >= CANFDI_DTC_IMAGE_HEADER_BYTES;
   uint32_t r = 0U;
   uint32_t e = 0U;
+  uint32_t entry_bytes = CANFDI_DTC_IMAGE_ENTRY_BYTES;
   if (ok) {
     r = buf[1];
     e = buf[2];
-    ok = (buf[0] == (uint8_t)CANFDI_DTC_IMAGE_VERSION) && (buf[3] == 0U) &&
+    /* version 1 images (4-byte time stamps) are still read */
+    entry_bytes = (buf[0] == 1U) ? CANFDI_DTC_IMAGE_ENTRY_BYTES_V1 : CANFDI_DTC_IMAGE_ENTRY_BYTES;
+    ok = ((buf[0] == (uint8_t)CANFDI_DTC_IMAGE_VERSION) || (buf[0] == 1U)) && (buf[3] == 0U) &&
          (len == (CANFDI_DTC_IMAGE_HEADER_BYTES + (r * CANFDI_DTC_IMAGE_RECORD_BYTES) +
-                  (e * CANFDI_DTC_IMAGE_ENTRY_BYTES)));
+                  (e * entry_bytes)));
   }
   const uint8_t *p = ok ? (buf + CANFDI_DTC_IMAGE_HEADER_BYTES) : buf;
   uint32_t seen[SEEN_WORDS] = {0U};
   for (uint32_t k = 0U; ok && (k < r); k++) {
     const int32_t i = canfdi_dtc_find(m, get_u24(p));
     if (i < 0) {
-      m->diag.image_dropped = inc_sat_u16(m->diag.image_dropped);
+      canfdi_count_inc16(&m->diag.image_dropped);
     } else if (seen_set(seen, (uint8_t)i)) {
       ok = false;
     } else {
@@ -722,7 +727,7 @@ static bool apply_image(canfdi_dtc_t *m, const uint8_t *buf, uint32_t len)
     if (!ok) {
       /* structural error */
     } else if (i < 0) {
-      m->diag.image_dropped = inc_sat_u16(m->diag.image_dropped);
+      canfdi_count_inc16(&m->diag.image_dropped);
     } else if (seen_set(seen, (uint8_t)i)) {
       ok = false;
     } else {
@@ -733,28 +738,30 @@ static bool apply_image(canfdi_dtc_t *m, const uint8_t *buf, uint32_t len)
         }
       }
       if (slot == CANFDI_DTC_NONE) {
-        m->diag.image_dropped = inc_sat_u16(m->diag.image_dropped);
+        canfdi_count_inc16(&m->diag.image_dropped);
       } else {
         canfdi_dtc_entry_t *en = &m->entry[slot];
         en->dtc_index = (uint8_t)i;
         en->occurrence = p[3];
         en->order = get_u32(p + 4);
         en->ff_valid = flags == 1U;
-        en->ff.time_ms = get_u32(p + 9);
-        en->ff.omega_q16 = bits_s32(get_u32(p + 13));
-        en->ff.ia_q16 = bits_s32(get_u32(p + 17));
-        en->ff.ua_q16 = bits_s32(get_u32(p + 21));
-        en->ff.thr_angle_q16 = bits_s32(get_u32(p + 25));
-        en->ff.supply_q16 = bits_s32(get_u32(p + 29));
-        en->ff.deg_dcm = p[33];
-        en->ff.deg_thr = p[34];
+        const uint8_t *q = p + ((entry_bytes == CANFDI_DTC_IMAGE_ENTRY_BYTES) ? 17 : 13);
+        en->ff.time_ms = (entry_bytes == CANFDI_DTC_IMAGE_ENTRY_BYTES) ? get_u64(p + 9)
+                                                                       : (uint64_t)get_u32(p + 9);
+        en->ff.omega_q16 = bits_s32(get_u32(q));
+        en->ff.ia_q16 = bits_s32(get_u32(q + 4));
+        en->ff.ua_q16 = bits_s32(get_u32(q + 8));
+        en->ff.thr_angle_q16 = bits_s32(get_u32(q + 12));
+        en->ff.supply_q16 = bits_s32(get_u32(q + 16));
+        en->ff.deg_dcm = q[20];
+        en->ff.deg_thr = q[21];
         m->dtc[i].entry = slot;
         if (en->order >= m->next_order) {
           m->next_order = (en->order < UINT32_MAX) ? (en->order + 1U) : UINT32_MAX;
         }
       }
     }
-    p += CANFDI_DTC_IMAGE_ENTRY_BYTES;
+    p += entry_bytes;
   }
   /* Entries dropped for lack of room (or a table whose warning flag
    * changed) leave bits that need an entry / the flag: withdraw them. */
@@ -784,7 +791,7 @@ int32_t canfdi_dtc_deserialize(canfdi_dtc_t *m, const uint8_t *buf, uint32_t len
       m->changes++;
     }
     if (out != CANFDI_OK) {
-      m->diag.image_rejected = inc_sat_u16(m->diag.image_rejected);
+      canfdi_count_inc16(&m->diag.image_rejected);
     }
   }
   return out;

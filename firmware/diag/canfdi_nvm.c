@@ -4,6 +4,8 @@
  */
 #include "diag/canfdi_nvm.h"
 
+#include "core/canfdi_count.h"
+
 CANFDI_STATIC_ASSERT(CANFDI_CFG_NVM_CHUNK_BYTES >= CANFDI_NVM_HEADER_BYTES, nvm_chunk_holds_header);
 CANFDI_STATIC_ASSERT((CANFDI_NVM_HEADER_BYTES % CANFDI_NVM_MAX_WRITE_UNIT) == 0U, nvm_header_aligned);
 
@@ -37,11 +39,6 @@ uint32_t canfdi_nvm_crc32(const uint8_t *data, uint32_t len)
 }
 
 /* ------------------------------------------------------------ helpers */
-
-static uint16_t inc_sat_u16(uint16_t c)
-{
-  return (c < UINT16_MAX) ? (uint16_t)(c + 1U) : c;
-}
 
 /* Round up to a multiple of the write unit (a power of two). */
 static uint32_t up(uint32_t x, uint32_t u)
@@ -185,9 +182,9 @@ static int32_t scan(canfdi_nvm_t *n)
     if (rc >= 0) {
       n->bank_state[b] = (uint8_t)rc;
       if (rc == (int32_t)CANFDI_NVM_BANK_CORRUPT) {
-        n->diag.corrupt_banks = inc_sat_u16(n->diag.corrupt_banks);
+        canfdi_count_inc16(&n->diag.corrupt_banks);
       } else if (rc == (int32_t)CANFDI_NVM_BANK_INCOMPLETE) {
-        n->diag.incomplete_banks = inc_sat_u16(n->diag.incomplete_banks);
+        canfdi_count_inc16(&n->diag.incomplete_banks);
       } else {
         /* empty or valid */
       }
@@ -279,9 +276,9 @@ int32_t canfdi_nvm_load(canfdi_nvm_t *n, uint8_t *buf, uint32_t cap)
       }
     }
     if (out >= 0) {
-      n->diag.loads = inc_sat_u16(n->diag.loads);
+      canfdi_count_inc16(&n->diag.loads);
     } else {
-      n->diag.load_failures = inc_sat_u16(n->diag.load_failures);
+      canfdi_count_inc16(&n->diag.load_failures);
     }
   }
   return out;
@@ -363,9 +360,9 @@ int32_t canfdi_nvm_store(canfdi_nvm_t *n, const uint8_t *data, uint32_t len)
         n->current = (int8_t)target;
         n->seq = seq;
         n->len = len;
-        n->diag.stores = inc_sat_u16(n->diag.stores);
+        canfdi_count_inc16(&n->diag.stores);
       } else {
-        n->diag.store_failures = inc_sat_u16(n->diag.store_failures);
+        canfdi_count_inc16(&n->diag.store_failures);
       }
     }
   }

@@ -4,14 +4,8 @@
  */
 #include "ft/canfdi_vote.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-static void inc_sat(uint32_t *c)
-{
-  if (*c < UINT32_MAX) {
-    *c += 1U;
-  }
-}
 
 static bool agree(int32_t a, int32_t b, int32_t tol)
 {
@@ -161,7 +155,7 @@ static void report_all(canfdi_vote_t *v, uint8_t avail, uint8_t outlier, canfdi_
       if (bad && (st == (int32_t)CANFDI_DEB_FAILED)) {
         v->isolated_mask = (uint8_t)(v->isolated_mask | bit);
         out->newly_isolated = bit;
-        inc_sat(&v->diag.isolations);
+        canfdi_count_inc(&v->diag.isolations);
       }
     }
   }
@@ -251,15 +245,15 @@ int32_t canfdi_vote_step(canfdi_vote_t *v, const canfdi_vote_in_t *in, canfdi_vo
       report_all(v, avail, outlier, out);
     }
     if (outlier != 0U) {
-      inc_sat(&v->diag.outlier_steps);
+      canfdi_count_inc(&v->diag.outlier_steps);
     }
-    inc_sat(&v->diag.steps);
+    canfdi_count_inc(&v->diag.steps);
     if (st == CANFDI_VOTE_DISAGREE) {
-      inc_sat(&v->diag.disagree_steps);
+      canfdi_count_inc(&v->diag.disagree_steps);
     } else if (st == CANFDI_VOTE_SINGLE) {
-      inc_sat(&v->diag.single_steps);
+      canfdi_count_inc(&v->diag.single_steps);
     } else if (st == CANFDI_VOTE_INVALID) {
-      inc_sat(&v->diag.invalid_steps);
+      canfdi_count_inc(&v->diag.invalid_steps);
     } else {
       /* decided */
     }
@@ -287,7 +281,7 @@ void canfdi_vote_clear(canfdi_vote_t *v)
     for (s = 0U; s < CANFDI_VOTE_N_SRC; s++) {
       canfdi_debounce_reset(&v->deb[s]);
     }
-    inc_sat(&v->diag.clears);
+    canfdi_count_inc(&v->diag.clears);
   }
 }
 

@@ -4,6 +4,8 @@
  */
 #include "port/linux/canfdi_socketcan.h"
 
+#include "core/canfdi_count.h"
+
 #include <errno.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
@@ -16,13 +18,6 @@
 #ifndef SO_RXQ_OVFL
 #define SO_RXQ_OVFL 40
 #endif
-
-static void inc(uint32_t *c)
-{
-  if (*c < UINT32_MAX) {
-    (*c)++;
-  }
-}
 
 int canfdi_socketcan_open(canfdi_socketcan_t *s, const char *ifname, const uint32_t *ids,
                           uint32_t n_ids)
@@ -146,11 +141,11 @@ int canfdi_socketcan_recv(canfdi_socketcan_t *s, canfdi_socketcan_frame_t *f)
       rc = 0;
     } else {
       s->last_errno = errno;
-      inc(&s->diag.rx_errors);
+      canfdi_count_inc(&s->diag.rx_errors);
       rc = -errno;
     }
   } else if (((size_t)n != sizeof cf) || (cf.can_dlc > 8U)) {
-    inc(&s->diag.rx_bad); /* not a classic frame: cannot happen without FD frames */
+    canfdi_count_inc(&s->diag.rx_bad); /* not a classic frame: cannot happen without FD frames */
     rc = 0;
   } else {
     take_overflow(s, &msg);
@@ -158,7 +153,7 @@ int canfdi_socketcan_recv(canfdi_socketcan_t *s, canfdi_socketcan_frame_t *f)
     f->dlc = cf.can_dlc;
     memset(f->data, 0, sizeof f->data);
     memcpy(f->data, cf.data, cf.can_dlc);
-    inc(&s->diag.rx_frames);
+    canfdi_count_inc(&s->diag.rx_frames);
     rc = 1;
   }
   return rc;
@@ -183,7 +178,7 @@ int canfdi_socketcan_send(canfdi_socketcan_t *s, uint32_t id, const uint8_t *dat
   while (rc > 0) {
     const ssize_t n = write(s->fd, &cf, sizeof cf);
     if (n == (ssize_t)sizeof cf) {
-      inc(&s->diag.tx_frames);
+      canfdi_count_inc(&s->diag.tx_frames);
       rc = 0;
     } else if ((n < 0) && (errno == EINTR)) {
       /* a signal: try again at once */
@@ -194,14 +189,14 @@ int canfdi_socketcan_send(canfdi_socketcan_t *s, uint32_t id, const uint8_t *dat
       (void)nanosleep(&ts, NULL);
       waited_us += pause_us;
       pause_us = (pause_us < 400U) ? (pause_us * 2U) : pause_us;
-      inc(&s->diag.tx_retries);
+      canfdi_count_inc(&s->diag.tx_retries);
     } else if ((n < 0) && ((errno == ENOBUFS) || (errno == EAGAIN))) {
       s->last_errno = ENOBUFS;
-      inc(&s->diag.tx_drops);
+      canfdi_count_inc(&s->diag.tx_drops);
       rc = -ENOBUFS;
     } else {
       s->last_errno = (n < 0) ? errno : EIO;
-      inc(&s->diag.tx_errors);
+      canfdi_count_inc(&s->diag.tx_errors);
       rc = -s->last_errno;
     }
   }
