@@ -123,18 +123,21 @@
  * reports of events whose operation cycle is not started). After init or a
  * load from NVM no cycle is active; the application starts one.
  *
- * ----------------------------------------------------- NVM byte image (v1)
+ * ----------------------------------------------------- NVM byte image (v2)
  * canfdi_dtc_serialize writes (all multi-byte fields big-endian, the UDS
  * byte order; DTCs as 3 bytes):
- *   0   u8  format version (CANFDI_DTC_IMAGE_VERSION)
+ *   0   u8  format version (CANFDI_DTC_IMAGE_VERSION, 2)
  *   1   u8  r, number of status records
  *   2   u8  e, number of entries
  *   3   u8  0 (reserved)
  *   4   r x 6 bytes: DTC(3), status, failed-cycle counter, healthy-cycle ctr
  *       (only DTCs whose state differs from the cleared state)
- *   ..  e x 35 bytes: DTC(3), occurrence, storage order(4), flags (bit 0:
- *       freeze frame valid), freeze frame: time_ms(4), omega, ia, ua,
+ *   ..  e x 39 bytes: DTC(3), occurrence, storage order(4), flags (bit 0:
+ *       freeze frame valid), freeze frame: time_ms(8), omega, ia, ua,
  *       thr_angle, supply (4 each), deg_dcm, deg_thr (1 each)
+ * canfdi_dtc_deserialize also reads version 1 images, whose entries are 35
+ * bytes with a 4-byte time_ms (an image stored by an earlier firmware is
+ * kept across the update).
  * Records are matched to the table by DTC number, so a table that gains or
  * loses DTCs still loads (unknown DTCs are dropped and counted). The
  * debouncer state is not stored (a new cycle restarts it anyway).
@@ -142,7 +145,7 @@
  * ---------------------------------------------------------------- cost
  * canfdi_dtc_report: one debounce step plus a dozen bit operations;
  *   O(CANFDI_CFG_DTC_MAX_ENTRIES) only when an entry is allocated (at most
- *   once per failure transition or cycle), plus a 28-byte copy.
+ *   once per failure transition or cycle), plus a 32-byte copy.
  * cycle_start/cycle_end, count_by_mask, clear: O(number of DTCs).
  * find, clear(one DTC), read_record: O(number of DTCs) (linear search).
  * serialize O(DTCs + entries); deserialize O(DTCs * records) (a linear
@@ -156,22 +159,24 @@
  *   report                      75 / 139 / 541     111 / 202 / 891
  *   cycle_start (+ implicit end)   1178 max 1213    1543 max 1718
  *   count_by_mask                  352              272
- *   serialize (464-byte image)     1965             2420
+ *   serialize (8 entries)          1965             2420
  *   deserialize (same image)       14183            16328
+ * (serialize and deserialize were measured with 4-byte freeze-frame time
+ * stamps; the 8-byte stamp adds four byte moves per entry.)
  * Stack (-fstack-usage, M0+): report 64 bytes + debounce 16, deserialize
  * 56 + 24, others <= 32.
  *
  * ---------------------------------------------------------------- memory
  * RAM: sizeof(canfdi_dtc_t) = 32 + 20 * CANFDI_CFG_DTC_MAX_DTCS
- *   + 36 * CANFDI_CFG_DTC_MAX_ENTRIES bytes on a 32-bit target (16 of the
- *   32 are the diagnostics); with the defaults (30 DTCs, 8 entries): 920
- *   bytes. Per DTC 20 bytes (16 of them the debouncer), per entry 36 bytes
- *   (28 of them the freeze frame).
+ *   + 48 * CANFDI_CFG_DTC_MAX_ENTRIES bytes on a 32-bit target (16 of the
+ *   32 are the diagnostics); with the defaults (30 DTCs, 8 entries): 1016
+ *   bytes. Per DTC 20 bytes (16 of them the debouncer), per entry 48 bytes
+ *   (32 of them the freeze frame).
  * ROM: the table, 16 bytes per DTC (480 for the product table), two
  *   debounce classes (28 bytes); code + tables 4038 bytes on M0+, 3764 on
  *   M4 (-Os), plus canfdi_debounce (472 / 438).
  * NVM image: at most CANFDI_DTC_IMAGE_MAX_BYTES
- *   (4 + 6 per DTC + 35 per entry: 464 bytes with the defaults).
+ *   (4 + 6 per DTC + 39 per entry: 496 bytes with the defaults).
  */
 #ifndef CANFDI_DTC_H
 #define CANFDI_DTC_H
@@ -187,7 +192,7 @@
 #endif
 
 /* Event-memory entries (freeze frame + occurrence), 1..254.
- * RAM: 36 bytes per entry; NVM image: 35 bytes per entry. */
+ * RAM: 48 bytes per entry; NVM image: 39 bytes per entry. */
 #ifndef CANFDI_CFG_DTC_MAX_ENTRIES
 #define CANFDI_CFG_DTC_MAX_ENTRIES 8U
 #endif
@@ -211,10 +216,11 @@
 #define CANFDI_DTC_NONE 0xFFU /* "no entry" / "free entry" index */
 
 /* Byte image (see above). */
-#define CANFDI_DTC_IMAGE_VERSION 1U
+#define CANFDI_DTC_IMAGE_VERSION 2U
 #define CANFDI_DTC_IMAGE_HEADER_BYTES 4U
 #define CANFDI_DTC_IMAGE_RECORD_BYTES 6U
-#define CANFDI_DTC_IMAGE_ENTRY_BYTES 35U
+#define CANFDI_DTC_IMAGE_ENTRY_BYTES 39U
+#define CANFDI_DTC_IMAGE_ENTRY_BYTES_V1 35U
 #define CANFDI_DTC_IMAGE_MAX_BYTES                                                      \
   (CANFDI_DTC_IMAGE_HEADER_BYTES + (CANFDI_DTC_IMAGE_RECORD_BYTES * CANFDI_CFG_DTC_MAX_DTCS) + \
    (CANFDI_DTC_IMAGE_ENTRY_BYTES * CANFDI_CFG_DTC_MAX_ENTRIES))
@@ -224,7 +230,7 @@
  * has them (Q16.16 SI units, see the signal convention of the firmware).
  */
 typedef struct {
-  uint32_t time_ms;      /* operating time stamp, ms since power-up */
+  uint64_t time_ms;      /* operating time stamp: the uptime in ms (core/canfdi_uptime.h) */
   int32_t omega_q16;     /* DC motor speed, rad/s */
   int32_t ia_q16;        /* DC motor armature current, A */
   int32_t ua_q16;        /* DC motor armature voltage, V */

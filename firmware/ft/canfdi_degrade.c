@@ -10,14 +10,7 @@ CANFDI_STATIC_ASSERT(CANFDI_DEG_NORMAL < CANFDI_DEG_DEGRADED &&
                          CANFDI_DEG_FAIL_SAFE < CANFDI_DEG_FAIL_SILENT,
                      degrade_states_ordered_by_safety);
 
-static void inc_sat(uint32_t *c)
-{
-  if (*c < UINT32_MAX) {
-    *c += 1U;
-  }
-}
-
-static void transition(canfdi_degrade_t *d, uint8_t to, uint8_t reason, uint32_t now_ms)
+static void transition(canfdi_degrade_t *d, uint8_t to, uint8_t reason, uint64_t now_ms)
 {
   canfdi_degrade_transition_t *e = &d->log[d->log_head];
   e->t_ms = now_ms;
@@ -29,12 +22,12 @@ static void transition(canfdi_degrade_t *d, uint8_t to, uint8_t reason, uint32_t
   if (d->log_count < CANFDI_DEGRADE_LOG_LEN) {
     d->log_count = (uint8_t)(d->log_count + 1U);
   } else {
-    inc_sat(&d->diag.log_overwrites);
+    canfdi_count_inc(&d->diag.log_overwrites);
   }
   d->state = to;
   d->reason = reason;
   d->since_ms = now_ms;
-  inc_sat(&d->diag.transitions);
+  canfdi_count_inc(&d->diag.transitions);
 }
 
 int32_t canfdi_degrade_init(canfdi_degrade_t *d)
@@ -67,19 +60,19 @@ int32_t canfdi_degrade_init(canfdi_degrade_t *d)
 }
 
 int32_t canfdi_degrade_request(canfdi_degrade_t *d, uint8_t state, uint8_t reason,
-                               uint32_t now_ms)
+                               uint64_t now_ms)
 {
   int32_t rc = -CANFDI_EINVAL;
   if (d != NULL) {
     CANFDI_ASSERT(d->state <= CANFDI_DEGRADE_STATE_MAX);
     if (state > CANFDI_DEGRADE_STATE_MAX) {
-      inc_sat(&d->diag.rejected);
+      canfdi_count_inc(&d->diag.rejected);
     } else {
       if (state > d->state) {
         transition(d, state, reason, now_ms);
-        inc_sat(&d->diag.escalations);
+        canfdi_count_inc(&d->diag.escalations);
       } else if (state < d->state) {
-        inc_sat(&d->diag.ignored_relax);
+        canfdi_count_inc(&d->diag.ignored_relax);
       } else {
         /* Re-assertion of the present state: the usual case every step. */
       }
@@ -90,20 +83,20 @@ int32_t canfdi_degrade_request(canfdi_degrade_t *d, uint8_t state, uint8_t reaso
 }
 
 int32_t canfdi_degrade_clear(canfdi_degrade_t *d, uint8_t cause, bool fault_present,
-                             uint32_t now_ms)
+                             uint64_t now_ms)
 {
   int32_t rc = -CANFDI_EINVAL;
   if (d != NULL) {
     if ((cause != CANFDI_DEGRADE_CLEAR_TESTER) && (cause != CANFDI_DEGRADE_CLEAR_NEW_CYCLE)) {
-      inc_sat(&d->diag.rejected);
+      canfdi_count_inc(&d->diag.rejected);
     } else if (fault_present) {
-      inc_sat(&d->diag.clears_refused);
+      canfdi_count_inc(&d->diag.clears_refused);
       rc = CANFDI_DEGRADE_CLEAR_REFUSED;
     } else {
       if (d->state != CANFDI_DEG_NORMAL) {
         transition(d, CANFDI_DEG_NORMAL, cause, now_ms);
       }
-      inc_sat(&d->diag.clears);
+      canfdi_count_inc(&d->diag.clears);
       rc = CANFDI_OK;
     }
   }
@@ -120,7 +113,7 @@ uint8_t canfdi_degrade_reason(const canfdi_degrade_t *d)
   return (d != NULL) ? d->reason : (uint8_t)CANFDI_FAULT_NONE;
 }
 
-uint32_t canfdi_degrade_since_ms(const canfdi_degrade_t *d)
+uint64_t canfdi_degrade_since_ms(const canfdi_degrade_t *d)
 {
   return (d != NULL) ? d->since_ms : 0U;
 }

@@ -50,8 +50,8 @@
  * diag.log_overwrites); canfdi_degrade_reason() / _since_ms() give the
  * reason and time of the transition into the present state.
  *
- * Time: a uint32_t in ms from the caller (the application's step counter
- * at 1 ms); it wraps after 49.7 days and is only stored, never compared.
+ * Time: the caller's uptime in ms (uint64_t, core/canfdi_uptime.h); only
+ * stored, never compared.
  *
  * Scaling and overflow: no arithmetic besides the monotone counters, which
  * saturate at UINT32_MAX.
@@ -61,8 +61,8 @@
  * -icount, 2000 random requests and clears, min/mean/max, call overhead
  * included): Cortex-M0+ code 23 / 38 / 76, Cortex-M4 14 / 27 / 62.
  * Code: 390 bytes (M0+). Stack: < 24 bytes.
- * Memory: sizeof(canfdi_degrade_t) = 100 bytes on a 32-bit target (8 log
- * entries of 8 bytes, 28 bytes of diagnostics, state/reason/time). No
+ * Memory: sizeof(canfdi_degrade_t) = 176 bytes on a 32-bit target (8 log
+ * entries of 16 bytes, 28 bytes of diagnostics, state/reason/time). No
  * heap, no globals.
  * Instances must not be copied while in use (no internal pointers here,
  * but the containing modules rely on that).
@@ -72,8 +72,9 @@
 
 #include "catalogue/canfdi_catalogue.h"
 #include "core/canfdi_common.h"
+#include "core/canfdi_count.h"
 
-/* Transitions kept in the log ring (RAM: 8 bytes each). */
+/* Transitions kept in the log ring (RAM: 16 bytes each). */
 #ifndef CANFDI_DEGRADE_LOG_LEN
 #define CANFDI_DEGRADE_LOG_LEN 8U
 #endif
@@ -89,7 +90,7 @@
 #define CANFDI_DEGRADE_CLEAR_REFUSED 1
 
 typedef struct {
-  uint32_t t_ms;  /* caller's time of the transition */
+  uint64_t t_ms;  /* caller's uptime at the transition */
   uint8_t from;   /* CANFDI_DEG_* before */
   uint8_t to;     /* CANFDI_DEG_* after */
   uint8_t reason; /* fault id, manager reason or CANFDI_DEGRADE_CLEAR_* */
@@ -113,7 +114,7 @@ typedef struct {
   uint8_t reason;     /* reason of the transition into `state` */
   uint8_t log_head;   /* index of the next entry to write */
   uint8_t log_count;  /* valid entries, <= CANFDI_DEGRADE_LOG_LEN */
-  uint32_t since_ms;  /* time of the transition into `state` */
+  uint64_t since_ms;  /* uptime at the transition into `state` */
   canfdi_degrade_transition_t log[CANFDI_DEGRADE_LOG_LEN];
   canfdi_degrade_diag_t diag;
 } canfdi_degrade_t;
@@ -131,7 +132,7 @@ int32_t canfdi_degrade_init(canfdi_degrade_t *d);
  * valid; nothing else changes). Cost: O(1).
  */
 int32_t canfdi_degrade_request(canfdi_degrade_t *d, uint8_t state, uint8_t reason,
-                               uint32_t now_ms);
+                               uint64_t now_ms);
 
 /*
  * Clear to NORMAL (clear rule above). Returns CANFDI_OK when the state is
@@ -141,7 +142,7 @@ int32_t canfdi_degrade_request(canfdi_degrade_t *d, uint8_t state, uint8_t reaso
  * Cost: O(1).
  */
 int32_t canfdi_degrade_clear(canfdi_degrade_t *d, uint8_t cause, bool fault_present,
-                             uint32_t now_ms);
+                             uint64_t now_ms);
 
 /* Present state (CANFDI_DEG_*); CANFDI_DEG_FAIL_SAFE for NULL, the safe
  * answer for a caller that lost its instance. Cost: O(1). */
@@ -150,7 +151,7 @@ uint8_t canfdi_degrade_state(const canfdi_degrade_t *d);
 /* Reason and time of the transition into the present state (NONE and 0
  * after init); CANFDI_FAULT_NONE / 0 for NULL. Cost: O(1). */
 uint8_t canfdi_degrade_reason(const canfdi_degrade_t *d);
-uint32_t canfdi_degrade_since_ms(const canfdi_degrade_t *d);
+uint64_t canfdi_degrade_since_ms(const canfdi_degrade_t *d);
 
 /*
  * Copy a logged transition: age 0 is the latest, age 1 the one before, ...

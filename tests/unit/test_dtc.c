@@ -857,6 +857,8 @@ static uint8_t *w_record(uint8_t *p, uint32_t dtc, uint8_t status, uint8_t fc, u
   return p + 3;
 }
 
+/* An entry of a version 1 image (4-byte time stamp), as stored by earlier
+ * firmware: still read. */
 static uint8_t *w_entry(uint8_t *p, uint32_t dtc, uint8_t occ, uint32_t order, uint8_t flags, int32_t v)
 {
   p = w24(p, dtc);
@@ -864,6 +866,26 @@ static uint8_t *w_entry(uint8_t *p, uint32_t dtc, uint8_t occ, uint32_t order, u
   p = w32(p, order);
   *p++ = flags;
   p = w32(p, 1000U);              /* time_ms */
+  p = w32(p, (uint32_t)v);        /* omega */
+  p = w32(p, (uint32_t)(v + 1));  /* ia */
+  p = w32(p, 0xFFFFFFFFU);        /* ua = -1 */
+  p = w32(p, 0x80000000U);        /* thr_angle = INT32_MIN */
+  p = w32(p, 0x7FFFFFFFU);        /* supply = INT32_MAX */
+  *p++ = 2U;
+  *p++ = 3U;
+  return p;
+}
+
+/* An entry of a version 2 image: the time stamp in 8 bytes. */
+static uint8_t *w_entry_v2(uint8_t *p, uint32_t dtc, uint8_t occ, uint32_t order, uint8_t flags,
+                           uint64_t time_ms, int32_t v)
+{
+  p = w24(p, dtc);
+  *p++ = occ;
+  p = w32(p, order);
+  *p++ = flags;
+  p = w32(p, (uint32_t)(time_ms >> 32));
+  p = w32(p, (uint32_t)time_ms);
   p = w32(p, (uint32_t)v);        /* omega */
   p = w32(p, (uint32_t)(v + 1));  /* ia */
   p = w32(p, 0xFFFFFFFFU);        /* ua = -1 */
@@ -902,7 +924,40 @@ START_TEST(test_image_layout_by_hand)
   ck_assert_uint_eq(st(&mem, (uint8_t)canfdi_dtc_find(&mem, CANFDI_DTC_P1A10)), 0x00U);
   ck_assert_uint_eq(st(&mem, (uint8_t)canfdi_dtc_find(&mem, CANFDI_DTC_P0123)), 0x50U);
   ck_assert_uint_eq(mem.next_order, 18U);
-  /* and serialize() writes exactly these bytes back */
+  /* and serialize() writes exactly these bytes back, as version 2 (the
+   * time stamp in 8 bytes) */
+  p = img;
+  *p++ = 2U;
+  *p++ = 2U;
+  *p++ = 1U;
+  *p++ = 0U;
+  p = w_record(p, CANFDI_DTC_P0122, 0xAEU, 1U, 0U);
+  p = w_record(p, CANFDI_DTC_P1A10, 0x00U, 0U, 0U);
+  p = w_entry_v2(p, CANFDI_DTC_P0122, 4U, 17U, 1U, 1000U, 5000);
+  ck_assert_int_eq(canfdi_dtc_serialize(&mem, img2, sizeof img2), (int32_t)(p - img));
+  ck_assert_mem_eq(img, img2, (size_t)(p - img));
+}
+END_TEST
+
+/* Version 2: a time stamp beyond 2^32 ms (49.7 days of operation) comes
+ * back whole, and the image survives serialize -> deserialize unchanged. */
+START_TEST(test_image_v2_time_beyond_32_bits)
+{
+  const uint64_t t = (UINT64_C(3) << 32) + 12345U;
+  uint8_t *p = img;
+  canfdi_dtc_record_t r;
+  *p++ = 2U;
+  *p++ = 1U;
+  *p++ = 1U;
+  *p++ = 0U;
+  p = w_record(p, CANFDI_DTC_P0122, 0xAEU, 1U, 0U);
+  p = w_entry_v2(p, CANFDI_DTC_P0122, 1U, 3U, 1U, t, -7);
+  ck_assert_int_eq(canfdi_dtc_init(&mem, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT), CANFDI_OK);
+  ck_assert_int_eq(canfdi_dtc_deserialize(&mem, img, (uint32_t)(p - img)), CANFDI_OK);
+  ck_assert_int_eq(canfdi_dtc_read_record(&mem, CANFDI_DTC_P0122, &r), CANFDI_OK);
+  ck_assert(r.ff.time_ms == t);
+  ck_assert_int_eq(r.ff.omega_q16, -7);
+  ck_assert_int_eq(r.ff.supply_q16, INT32_MAX);
   ck_assert_int_eq(canfdi_dtc_serialize(&mem, img2, sizeof img2), (int32_t)(p - img));
   ck_assert_mem_eq(img, img2, (size_t)(p - img));
 }
@@ -914,7 +969,7 @@ typedef struct {
 } bad_img_t;
 
 static const bad_img_t bad_imgs[] = {
-    {"version 2", 0},
+    {"version 3", 0},
     {"reserved byte", 1},
     {"one byte short", 2},
     {"one byte long", 3},
@@ -942,7 +997,7 @@ START_TEST(test_image_rejects)
   p = w_entry(p, CANFDI_DTC_P0122, 1U, 0U, 1U, 7);
   len = (uint32_t)(p - img);
   switch (c->kind) {
-  case 0: img[0] = 2U; break;
+  case 0: img[0] = 3U; break;
   case 1: img[3] = 1U; break;
   case 2: len--; break;
   case 3: len++; break;
@@ -1089,6 +1144,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_image_round_trip, 0, 4);
   tcase_add_test(tc, test_image_full_size_bound);
   tcase_add_test(tc, test_image_layout_by_hand);
+  tcase_add_test(tc, test_image_v2_time_beyond_32_bits);
   tcase_add_loop_test(tc, test_image_rejects, 0, (int)(sizeof bad_imgs / sizeof bad_imgs[0]));
   tcase_add_test(tc, test_image_table_change_and_capacity);
   suite_add_tcase(s, tc);
