@@ -103,6 +103,9 @@
 #define CANFDI_KIND_ACTUATOR 3U
 #define CANFDI_KIND_COMMUNICATION 4U
 
+/* Sets of fault ids as a bitset: bit i is fault id i (the ids fit 32 bits). */
+#define CANFDI_FAULT_BIT(id) ((uint32_t)1U << (id))
+
 #define CANFDI_CATALOGUE_MAX_DTCS 2U
 
 typedef struct {

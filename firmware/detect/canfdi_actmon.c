@@ -1,0 +1,114 @@
+/*
+ * canfdi_actmon.c — actuator monitors; the manual is the header.
+ */
+#include "detect/canfdi_actmon.h"
+
+#include "core/canfdi_count.h"
+#include "core/canfdi_fixp.h"
+#include "core/canfdi_qconst.h"
+
+void canfdi_actmon_default_cfg(canfdi_actmon_cfg_t *cfg)
+{
+  if (cfg != NULL) {
+    cfg->track_alpha_q16 = CANFDI_Q16(1, 500);
+    cfg->track_thr_rad_q16 = CANFDI_Q16_MILLI(50);
+    cfg->open_u_min_V_q16 = 3 * CANFDI_Q16_ONE;
+    cfg->open_i_max_A_q16 = CANFDI_Q16_MILLI(50);
+    cfg->uac_alpha_q16 = CANFDI_Q16(1, 8);
+    cfg->uac_thr_V_q16 = CANFDI_Q16_MILLI(500);
+    cfg->uac_headroom_V_q16 = 2 * CANFDI_Q16_ONE;
+  }
+}
+
+static bool alpha_ok(int32_t a) { return (a > 0) && (a <= CANFDI_Q16_ONE); }
+
+int32_t canfdi_actmon_init(canfdi_actmon_t *m, const canfdi_actmon_cfg_t *cfg)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if (m != NULL) {
+    m->initialised = false;
+    if ((cfg != NULL) && alpha_ok(cfg->track_alpha_q16) && (cfg->track_thr_rad_q16 > 0) &&
+        (cfg->open_u_min_V_q16 > 0) && (cfg->open_i_max_A_q16 > 0) &&
+        alpha_ok(cfg->uac_alpha_q16) && (cfg->uac_thr_V_q16 > 0) &&
+        (cfg->uac_headroom_V_q16 >= 0)) {
+      m->cfg = *cfg;
+      m->track_err_rad_q16 = 0;
+      m->uac_V_q16 = 0;
+      m->diag = (canfdi_actmon_diag_t){0};
+      m->initialised = true;
+      rc = CANFDI_OK;
+    }
+  }
+  return rc;
+}
+
+/* x += alpha (u - x), saturating. */
+static int32_t lowpass(int32_t x, int32_t u, int32_t alpha_q16)
+{
+  return canfdi_add_s32_sat(x, canfdi_mul_s32_qn(canfdi_sub_s32_sat(u, x), alpha_q16, 16U));
+}
+
+static void step_thr(canfdi_actmon_t *m, const canfdi_actmon_in_t *in, canfdi_actmon_out_t *out)
+{
+  const canfdi_actmon_cfg_t *c = &m->cfg;
+  const int32_t err = canfdi_q31_abs(canfdi_sub_s32_sat(in->thr_angle_rad_q16, in->thr_ref_rad_q16));
+  m->track_err_rad_q16 = lowpass(m->track_err_rad_q16, err, c->track_alpha_q16);
+  out->thr_track_err_rad_q16 = m->track_err_rad_q16;
+  out->thr_not_following = in->thr_angle_valid && in->thr_enabled &&
+                           (m->track_err_rad_q16 > c->track_thr_rad_q16);
+  out->thr_no_current = in->thr_enabled && (canfdi_q31_abs(in->thr_u_cmd_V_q16) > c->open_u_min_V_q16) &&
+                        in->thr_i_valid && (canfdi_q31_abs(in->thr_i_A_q16) < c->open_i_max_A_q16);
+  if (out->thr_not_following) {
+    canfdi_count_inc(&m->diag.not_following_steps);
+  }
+  if (out->thr_no_current) {
+    canfdi_count_inc(&m->diag.no_current_steps);
+  }
+}
+
+static void step_uac(canfdi_actmon_t *m, const canfdi_actmon_in_t *in, canfdi_actmon_out_t *out)
+{
+  const canfdi_actmon_cfg_t *c = &m->cfg;
+  const bool judged = in->dcm_enabled && in->dcm_bridge_settled && in->dcm_ua_valid &&
+                      in->dcm_supply_valid &&
+                      (canfdi_q31_abs(in->dcm_u_cmd_V_q16) <
+                       canfdi_sub_s32_sat(in->dcm_supply_V_q16, c->uac_headroom_V_q16));
+  out->dcm_uac_valid = judged;
+  if (judged) {
+    m->uac_V_q16 = lowpass(m->uac_V_q16, canfdi_sub_s32_sat(in->dcm_ua_V_q16, in->dcm_u_cmd_V_q16),
+                           c->uac_alpha_q16);
+    out->dcm_uac_rn_q16 = canfdi_div_s32_qn(m->uac_V_q16, c->uac_thr_V_q16, 16U);
+    canfdi_count_inc(&m->diag.uac_judged_steps);
+  } else {
+    out->dcm_uac_rn_q16 = 0;
+  }
+}
+
+int32_t canfdi_actmon_step(canfdi_actmon_t *m, const canfdi_actmon_in_t *in,
+                           canfdi_actmon_out_t *out)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if (out != NULL) {
+    *out = (canfdi_actmon_out_t){0};
+  }
+  if ((m != NULL) && m->initialised && (in != NULL) && (out != NULL)) {
+    step_thr(m, in, out);
+    step_uac(m, in, out);
+    canfdi_count_inc(&m->diag.steps);
+    rc = CANFDI_OK;
+  } else if ((m != NULL) && m->initialised) {
+    canfdi_count_inc(&m->diag.rejected);
+  } else {
+    /* nothing to count on */
+  }
+  return rc;
+}
+
+canfdi_actmon_diag_t canfdi_actmon_diag(const canfdi_actmon_t *m)
+{
+  canfdi_actmon_diag_t d = {0};
+  if (m != NULL) {
+    d = m->diag;
+  }
+  return d;
+}

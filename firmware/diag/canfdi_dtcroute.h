@@ -1,0 +1,113 @@
+/*
+ * canfdi_dtcroute.h — from monitor results to trouble codes: routes each
+ * step's verdicts into the DTC memory (diag/canfdi_dtc.h), and latches the
+ * faults the actuator manager acts on.
+ *
+ * Sources per step, reported in this order:
+ *   1. the diagnosis' verdict per catalogue fault (canfdi_diagnosis_step),
+ *      overridden by FAILED for the faults the actuator manager detected
+ *      itself in the last step; a DTC fed by several faults (P0122: TPS1
+ *      open and both TPS lost) fails if any of them reports FAILED and
+ *      passes only if none fails and one passes; reported in DTC table
+ *      order;
+ *   2. P2135 (TPS1/TPS2 correlation), which has no fault id: FAILED once
+ *      the diagnosis has held a TPS disagreement it could not isolate to
+ *      one sensor for p2135_steps consecutive steps; PASSED while the
+ *      correlation channel is valid and no disagreement persists (the
+ *      count restarts); not tested while the channel is invalid (the count
+ *      holds). A drift the vote isolates (P0121/P0221) within p2135_steps
+ *      is not a P2135;
+ *   3. the input supervision's monitors (canfdi_rx report of the step), in
+ *      monitor order, each to its U-code (monitors without a code skipped).
+ * The DTC table index of every fault, monitor and of P2135 is looked up
+ * once at init (a linear search per code), so a step costs no search.
+ *
+ * Faults for the manager (canfdi_dtcroute_manager_faults): a communication
+ * fault while its trouble code has testFailed (qualified by the DTC memory's
+ * debouncing); any other fault latched from a FAILED verdict of the
+ * diagnosis until a PASSED one (not tested keeps it).
+ *
+ * Scaling and overflow: no arithmetic besides the persistence count
+ * (uint16_t, stops at p2135_steps) and the saturating counters.
+ * Cost per canfdi_dtcroute_step: one pass over the faults (32 x 2 table
+ * reads), one over the DTCs (30 reports at most, each a canfdi_dtc_report),
+ * 16 monitor bits. manager_faults: one pass over the faults, a status read
+ * per communication fault.
+ * Memory: sizeof(canfdi_dtcroute_t) = 108 bytes on a 32-bit target (the
+ * index tables 64 + 16, state, config, diagnostics). No heap.
+ */
+#ifndef CANFDI_DTCROUTE_H
+#define CANFDI_DTCROUTE_H
+
+#include "catalogue/canfdi_catalogue.h"
+#include "comm/canfdi_rx.h"
+#include "core/canfdi_common.h"
+#include "diag/canfdi_dtc.h"
+
+typedef struct {
+  uint16_t p2135_steps; /* 1..65535: unisolated disagreement until P2135 fails */
+} canfdi_dtcroute_cfg_t;
+
+/* One step's verdicts. */
+typedef struct {
+  const int8_t *report;        /* [CANFDI_FAULT_COUNT] CANFDI_DIAG_REPORT_* per fault id */
+  uint32_t mgr_detected;       /* fault bits the manager detected itself (last step) */
+  bool corr_not_isolated;      /* TPS disagreement persistent, not isolated */
+  bool corr_tested;            /* the TPS correlation channel is valid */
+  const canfdi_rx_report_t *com; /* the input supervision's monitors of this step */
+  const canfdi_dtc_ff_t *ff;   /* snapshot stored with a first failure */
+} canfdi_dtcroute_in_t;
+
+/* Monotone counters, saturating at UINT32_MAX; only init zeroes them. */
+typedef struct {
+  uint32_t steps;
+  uint32_t reports;          /* reports given to the DTC memory */
+  uint32_t reports_rejected; /* reports the DTC memory refused (no cycle, bad index) */
+} canfdi_dtcroute_diag_t;
+
+typedef struct {
+  canfdi_dtcroute_cfg_t cfg;
+  uint8_t fault_dtc[CANFDI_FAULT_COUNT][CANFDI_CATALOGUE_MAX_DTCS]; /* DTC index or NONE */
+  uint8_t com_dtc[CANFDI_RX_MON_COUNT];                            /* DTC index or NONE */
+  uint8_t p2135_dtc;                                               /* DTC index or NONE */
+  uint16_t p2135_n;   /* steps the disagreement stayed unisolated */
+  uint32_t faults;    /* latched fault bits for the manager */
+  canfdi_dtcroute_diag_t diag;
+  bool initialised;
+} canfdi_dtcroute_t;
+
+/* The product's P2135 persistence: 500 steps (500 ms; production ECUs
+ * report P2135 within 200..500 ms, docs/requirements.md). Cannot fail for
+ * non-NULL. */
+void canfdi_dtcroute_default_cfg(canfdi_dtcroute_cfg_t *cfg);
+
+/*
+ * Validates cfg and builds the index tables against the table of dtc (an
+ * initialised memory; a code missing from it is not routed). Latched
+ * faults and counters 0. Returns CANFDI_OK or -CANFDI_EINVAL. Cost: O(faults
+ * x DTCs) compares, at init only.
+ */
+int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *cfg,
+                             const canfdi_dtc_t *dtc);
+
+/*
+ * Reports this step's verdicts to dtc (sources 1-3 above). Returns the
+ * number of reports the DTC memory refused (>= 0; also counted), or
+ * -CANFDI_EINVAL for a NULL argument or an unusable instance.
+ */
+int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
+                             const canfdi_dtcroute_in_t *in);
+
+/*
+ * Updates and returns the fault bits for the manager (bit i = catalogue
+ * fault id i): communication faults from their DTC's testFailed, the others
+ * latched from report[] (FAILED sets, PASSED clears, NONE keeps). 0 for a
+ * NULL argument. Cost: see the header.
+ */
+uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t *dtc,
+                                        const int8_t *report);
+
+/* Diagnostics snapshot (zeros for NULL). */
+canfdi_dtcroute_diag_t canfdi_dtcroute_diag(const canfdi_dtcroute_t *r);
+
+#endif /* CANFDI_DTCROUTE_H */
