@@ -127,3 +127,10 @@ sil-pil: $(SIL_BIN) $(SIL_PIL_ELFS)
 	@set -e; for c in $(SIL_PIL_CORES); do echo "== $$c code"; \
 	  qemu-system-arm -M mps2-an386 -nographic -icount shift=6 \
 	    -semihosting-config enable=on,target=native -kernel $(BUILD)/pil/pil_step_$$c.elf; done
+
+# Unit tests that close the loop with the plants decode the ECU's frames
+# with the tester codec above (pack and unpack of every message).
+UNIT_EXTRA_OBJ += $(SIL_GEN_OBJ)
+SIL_CODEC_UNIT_OBJ := $(BUILD)/unit/test_app_regress.o $(BUILD)/unit/test_app_out.o
+$(SIL_CODEC_UNIT_OBJ): $(SIL_GEN_H)
+$(SIL_CODEC_UNIT_OBJ): HOST_CFLAGS += -I$(SIL_GEN_DIR)

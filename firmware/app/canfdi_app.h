@@ -3,99 +3,117 @@
  * allocated state that closes both control loops, supervises its inputs and
  * both plants, names the fault, remembers it and keeps the plants safe.
  *
- * Ports. Frames in: canfdi_app_rx_frame() for every received CAN frame
- * (any id; the input supervision judges it). Frames out: canfdi_app_step()
- * writes the frames to send in this step into the caller's buffer
- * (CANFDI_APP_MAX_TX frames). Nothing else crosses the boundary: the same
- * core runs in SIL (tests/sil), on SocketCAN and on a microcontroller.
+ * The port's interface (docs/architecture.md). Nothing else crosses the
+ * boundary: the same core
+ * runs in SIL (tests/sil), on SocketCAN (port/linux) and on a
+ * microcontroller (port/cortexm).
+ *   power-up      canfdi_app_power_up(app, cal, now_us, image, len): a cold
+ *                 start with the DTC memory's NVM image (or none), and a
+ *                 new operation cycle; canfdi_app_init is the same without
+ *                 an image
+ *   frames in     canfdi_app_rx_frame() for every received CAN frame (any
+ *                 id; the input supervision judges it)
+ *   1 ms step     canfdi_app_step() writes the frames to send in this step
+ *                 into the caller's buffer (CANFDI_APP_MAX_TX frames)
+ *   NVM           canfdi_app_nvm_image() for a periodic store while
+ *                 running (when canfdi_app_nvm_changes() moved);
+ *                 canfdi_app_power_down() ends the operation cycle and
+ *                 gives the image to store before power is cut
+ *   timing        canfdi_app_deadline_miss(), canfdi_app_port_timing()
+ * A tester's requests act through canfdi_app_new_cycle() and
+ * canfdi_app_clear_dtc(); the DTC memory is read through canfdi_app_dtc().
  *
- * Order inside one step (canfdi_app_step):
- *   1. input supervision  canfdi_rx_step: validated inputs, U-code monitors
- *   2. range checks       canfdi_limit on TPS1/TPS2 (raw symptom excludes
- *                         the sensor from the vote at once)
- *   3. voting             canfdi_vote over TPS1, TPS2 and the throttle
+ * The step is a sequence of stages; each stage is a module with its own
+ * configuration, counters and manual, and the stages pass narrow structs:
+ *   1. input supervision  canfdi_rx: validated inputs and the U-code
+ *                         monitors; the nominal load stands in for a lost
+ *                         load feed-forward
+ *   2. vote               canfdi_limit range checks of TPS1/TPS2, then
+ *                         canfdi_vote over TPS1, TPS2 and the throttle
  *                         observer's angle of the previous step
- *   4. control            ctrl_dcm (speed), ctrl_thr (position) + excitation,
- *                         in the mode the actuator manager set last step
- *   5. detection          parity_dcm, parity_thr (residuals), est_dcm,
+ *   3. control            ctrl_dcm (speed), ctrl_thr (position) plus the
+ *                         estimators' excitation, in the mode the actuator
+ *                         manager set last step
+ *   4. detection          parity_dcm, parity_thr (residuals), est_dcm,
  *                         est_thr (parameters; their RLS updates are
- *                         decimated inside the modules). An estimator is
- *                         not fed while an input of its equations is known
- *                         bad (U_A: UAC symptom or a latched U_A offset) or
- *                         its plant is not driven (throttle de-energised,
- *                         no valid position, no current); it restarts with
- *                         a covariance reset and its parameter symptoms
- *                         stay invalid until it has re-converged
- *   6. symptoms           canfdi_symptoms_t
- *   7. diagnosis          canfdi_diagnosis_step: report per fault id
- *   8. DTC memory         diagnosis, manager and rx monitors -> canfdi_dtc,
- *                         freeze frame of the key signals
- *   9. fault tolerance    canfdi_actmgr (bridges, limp-home, degradation)
- *  10. outputs            canfdi_tx: actuators every step, residuals 10 ms,
- *                         status / diagnosis / self-diagnostics / DTC /
- *                         parameters 100 ms, DTC
- *                         status changes on change
- * The models use the command applied in the previous step (the voltage the
- * bridge held over the interval that ends with this sample).
+ *                         decimated inside the modules), the actuator
+ *                         monitors (detect/canfdi_actmon)
+ *   5. symptoms           canfdi_app_sym: the symptom vector
+ *   6. diagnosis          canfdi_diagnosis: a verdict per fault id
+ *   7. trouble codes      canfdi_dtcroute: verdicts, the manager's own
+ *                         findings and the U-code monitors into the DTC
+ *                         memory, with a freeze frame of the key signals
+ *   8. fault tolerance    canfdi_actmgr: bridges, limp-home, degradation
+ *   9. outputs            canfdi_app_out: actuators every step, residuals
+ *                         10 ms, status / diagnosis / self-diagnostics /
+ *                         DTC / parameters 100 ms, DTC status changes on
+ *                         change
+ * Feedback (canfdi_app_fb_t): what the last step decided and this step
+ * obeys. The models use the commands the manager applied over the interval
+ * that ends with this step's samples; the observer's angle is not offered
+ * to the vote while the diagnosis holds a persistent throttle armature
+ * symptom (its velocity rests on the armature equation); an estimator is
+ * not fed while an input of its equations is known bad (U_A: the UAC
+ * symptom or a latched U_A offset) or its plant is not driven (throttle
+ * de-energised, no valid position, no motor current). A fed-again
+ * estimator restarts with a covariance reset and its parameter symptoms
+ * stay invalid until it has re-converged.
+ *
+ * Start-up: no drive is energised before its plant's inputs were valid once
+ * (the sensor node may boot after this ECU, cal.rx.first_timeout_us); the
+ * actuator manager holds it off (canfdi_actmgr.h, hold-off).
+ *
+ * Time: the port's microsecond clock (now_us, uint32_t) may wrap every
+ * 71.6 minutes; supervision windows use its differences. Time stamps (the
+ * freeze frames, the degradation records) use the uptime in ms kept from
+ * it (core/canfdi_uptime.h), right for years.
  *
  * Load: the firmware has no torque sensor; the vehicle sends the load it
- * knows it applies with the speed setpoint (SpDcmLoad, rx input
- * CANFDI_RX_IN_SP_DCM_LOAD). It is the parity equations' load_Nm_q16, the
- * estimator's known load offset (canfdi_est_dcm_set_load_offset, relative
- * to cal.load_nom_Nm_q16 which est_dcm's mc_nom includes), and the lumped
- * M_c deviation compares against mc_nom + (known - nominal) load,
- * normalised to mc_nom. Lost or rejected: cal.load_nom_Nm_q16 (given to
- * canfdi_rx as the stand-in every step). An unknown share of the load (the
- * vehicle's figure is wrong or incomplete) still looks like friction: r2..r4
- * follow their mean over load_tau_s, the lumped M_c does not.
+ * knows it applies with the speed setpoint (SpDcmLoad). It is the parity
+ * equations' load input, the estimator's known load offset (relative to
+ * cal.load_nom_Nm_q16, which est_dcm's mc_nom includes), and the lumped M_c
+ * deviation's reference. Lost or rejected: cal.load_nom_Nm_q16. An
+ * unknown share of the load still looks like friction: r2..r4 follow their
+ * mean over load_tau_s, the lumped M_c does not.
  *
- * Faults given to the manager: the catalogue ids whose trouble code has
- * testFailed set (qualified by the DTC memory's debouncing), plus the ids
- * the diagnosis reports FAILED this step, plus what the manager detected
- * itself. The manager's degradation ratchet keeps them latched.
- *
- * Scaling and overflow: all signals Q16.16 SI (see the modules); the app
- * adds only conversions by the modules' own helpers and saturating
- * arithmetic (canfdi_fixp.h). Normalised parameter deviations
- * (est - nom) / nom are formed with canfdi_div_s32_qn (saturating).
+ * Scaling and overflow: all signals Q16.16 SI (see the modules); the
+ * application adds only the modules' conversions and saturating
+ * arithmetic (core/canfdi_fixp.h). Counters saturate.
  *
  * Cost per canfdi_app_step, executed instructions measured on QEMU
  * mps2-an386 with -icount (SysTick), arm-none-eabi-gcc 12 -Os, over the
- * 24 000 steps of the SIL demo (tests/sil/scenarios/demo.scn: fault-free
- * phase, TPS drift, R_A fault, bridge switchover, limp-home), `make sil-pil`
- * (the M0+ code runs on the same emulated core: instruction counts, not
- * cycles):
+ * 24 000 steps of the SIL demo (tests/sil/scenarios/demo.scn), `make
+ * sil-pil` (the M0+ code runs on the same emulated core: instruction counts,
+ * not cycles):
  *                      min      mean     max
- *   Cortex-M4          30 500   51 700   75 600
- *   Cortex-M0+ code    53 900   97 200  140 900
- * The model layer dominates (parity_dcm, parity_thr, est_dcm, est_thr: SVFs
- * every step, RLS updates decimated inside the modules; the throttle's
- * always-on excitation keeps its mechanical estimator and fast test busy);
- * the max was seen at 5.7 s (M4) and 6.3 s (M0+) of the demo.
- * A 1 ms step therefore needs a Cortex-M4 of roughly 100 MHz or more with
- * margin; on a Cortex-M0+ at 48 MHz it does not fit (raise the estimators'
- * decim, or run them in a slower task). Host (x86-64, gcc -O2, callgrind):
- * 35.6..37.5 k instructions per step on average (`make sil-bench`). The same
- * run shows the ECU's frames bit-identical between the host build and both
- * target builds.
- * Memory: sizeof(canfdi_app_t) = 9496 bytes on Cortex-M0+/M4 (~940 of them
- * the calibration copy), all of the application's RAM (static; `make
- * firmware` shows it in .bss); code ~5.4 kB for this module (M0+, -Os) on
- * top of the modules it calls. Stack: canfdi_app_step 296 bytes (M0+,
- * -fstack-usage, helpers inlined) plus the deepest module it calls. No heap.
+ *   Cortex-M4          27 200   48 400   72 500
+ *   Cortex-M0+ code    51 000   94 100  137 900
+ * The model layer dominates (SVFs every step, RLS updates decimated inside
+ * the modules). A 1 ms step needs a Cortex-M4 of roughly 100 MHz or more
+ * with margin; on a Cortex-M0+ at 48 MHz it does not fit. Host (x86-64,
+ * gcc -O2, callgrind): `make sil-bench`. The same run shows the ECU's
+ * frames bit-identical between the host build and both target builds.
+ * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host)
+ * and is the .bss of `make firmware` on the targets; all of the
+ * application's RAM, static. No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H
 
+#include "app/canfdi_app_cal.h"
+#include "app/canfdi_app_out.h"
 #include "comm/canfdi_rx.h"
 #include "comm/canfdi_tx.h"
 #include "core/canfdi_common.h"
+#include "core/canfdi_uptime.h"
 #include "ctrl/canfdi_ctrl_dcm.h"
 #include "ctrl/canfdi_ctrl_thr.h"
 #include "ctrl/canfdi_excite.h"
+#include "detect/canfdi_actmon.h"
 #include "detect/canfdi_limit.h"
 #include "diag/canfdi_diagnosis.h"
 #include "diag/canfdi_dtc.h"
+#include "diag/canfdi_dtcroute.h"
 #include "diag/canfdi_symptoms.h"
 #include "ft/canfdi_actmgr.h"
 #include "ft/canfdi_vote.h"
@@ -106,33 +124,10 @@
 
 #define CANFDI_APP_MAX_TX CANFDI_TX_MAX_FRAMES_PER_STEP
 
-/* The one calibration of the product: every module's configuration. */
-typedef struct {
-  canfdi_rx_cfg_t rx;
-  canfdi_ctrl_dcm_cal_t ctrl_dcm;
-  canfdi_ctrl_thr_cal_t ctrl_thr;
-  canfdi_excite_cfg_t excite_dcm; /* added to the speed reference, rad/s */
-  canfdi_excite_cfg_t excite_thr; /* added to the angle reference, rad */
-  bool excite_dcm_on;
-  bool excite_thr_on;
-  canfdi_parity_dcm_cfg_t parity_dcm;
-  canfdi_parity_thr_cfg_t parity_thr;
-  canfdi_est_dcm_cfg_t est_dcm;
-  canfdi_est_thr_cfg_t est_thr;
-  canfdi_limit_cfg_t tps_range;    /* TPS voltage window, Q16.16 V */
-  canfdi_vote_cfg_t vote;
-  canfdi_actmgr_cfg_t actmgr;
-  canfdi_diagnosis_cfg_t diagnosis;
-  int32_t load_nom_Nm_q16;         /* load the models assume while the vehicle's
-                                    * load feed-forward (SetpointDcm.SpDcmLoad) is
-                                    * lost, rejected or not yet received */
-  int32_t track_err_alpha_q16;     /* low-pass of |angle - setpoint| per step */
-  uint16_t p2135_steps;            /* TPS disagreement not isolated this long -> P2135 */
-  int32_t uac_alpha_q16;           /* low-pass of U_A - command per step */
-  int32_t uac_thr_V_q16;           /* threshold of the filtered U_A - command */
-} canfdi_app_cal_t;
+/* canfdi_app_power_up: the NVM image was rejected; the memory starts cleared. */
+#define CANFDI_APP_IMAGE_REJECTED 1
 
-/* Monotone self-diagnostics, saturating at UINT32_MAX. */
+/* Monotone self-diagnostics, saturating at UINT32_MAX (EcuSelfDiag). */
 typedef struct {
   uint32_t steps;
   uint32_t deadline_misses;   /* reported by the port */
@@ -144,8 +139,26 @@ typedef struct {
   uint32_t dtc_reports_rejected;
 } canfdi_app_diag_t;
 
+/* What the last step decided and this step obeys (see the header). */
 typedef struct {
-  canfdi_app_cal_t cal;  /* copy; the modules point into it */
+  canfdi_actmgr_out_t mgr; /* commands applied over the interval ending now, states */
+  uint32_t faults;         /* fault bits the manager acted on */
+  bool thr_arm_symptom;    /* persistent throttle armature symptom: model not voted */
+  bool dcm_ua_bad;         /* U_A known bad: the DC-motor estimator is not fed */
+  bool thr_no_current;     /* throttle motor draws no current: its estimator is not fed */
+} canfdi_app_fb_t;
+
+/* Which plant's models run and learn; state, not counters. */
+typedef struct {
+  bool in_ok;     /* the plant's inputs VALID this step: parity equations run */
+  bool started;   /* in_ok was true once since power-up: the drive may be energised */
+  bool est_on;    /* the estimator was fed this step */
+  bool est_fed;   /* the estimator was fed at least once since power-up */
+  bool stepped;   /* the parity equations ran at least once since power-up */
+} canfdi_app_gate_t;
+
+typedef struct {
+  canfdi_app_cal_t cal; /* copy; the modules point into it */
   canfdi_rx_t rx;
   canfdi_tx_t tx;
   canfdi_ctrl_dcm_t ctrl_dcm;
@@ -158,44 +171,68 @@ typedef struct {
   canfdi_est_thr_t est_thr;
   canfdi_limit_t tps_range[2];
   canfdi_vote_t vote;
+  canfdi_actmon_t actmon;
   canfdi_actmgr_t actmgr;
   canfdi_diagnosis_t diagnosis;
   canfdi_dtc_t dtc;
-  canfdi_symptoms_t sym;
+  canfdi_dtcroute_t dtcroute;
+  canfdi_app_out_t out;
+  canfdi_uptime_t uptime;
+  /* results of this step's stages */
   canfdi_vote_out_t vote_out;
-  canfdi_actmgr_out_t mgr_out;   /* of the last step */
+  canfdi_actmon_out_t actmon_out;
+  canfdi_symptoms_t sym;
   int8_t report[CANFDI_FAULT_COUNT];
-  uint8_t dtc_index[CANFDI_FAULT_COUNT][CANFDI_CATALOGUE_MAX_DTCS]; /* 0xFF none */
-  uint8_t dtc_status_prev[CANFDI_DTC_COUNT];
-  uint32_t faults;               /* fault bits given to the manager last step */
-  int32_t thr_track_err_q16;
-  int32_t uac_f_q16;             /* filtered U_A - applied command, V */
-  uint16_t p2135_n;              /* steps the disagreement stayed unisolated */
-  bool dcm_in_ok;                /* U_A, I_A, omega VALID this step */
-  bool thr_in_ok;                /* TPS1/2, current, supply usable this step */
-  bool dcm_started;              /* dcm_in_ok was true once (start-up inhibit) */
-  bool thr_started;              /* thr_in_ok was true once */
-  bool dcm_est_on;               /* est_dcm fed this step (see step_detect) */
-  bool thr_est_on;               /* est_thr fed this step (see step_detect) */
-  uint32_t now_us;
-  uint32_t step_time_max_us;  /* port timing since the last EcuStatus (0 in SIL) */
-  uint32_t cycle_time_max_us;
+  canfdi_app_gate_t dcm;
+  canfdi_app_gate_t thr;
+  canfdi_app_fb_t fb;   /* of the last step, for this one */
   canfdi_app_diag_t diag;
+  bool running;         /* a step has run since power-up */
   bool initialised;
 } canfdi_app_t;
 
-/* Defaults of every module (their *_default_cfg / *_cal_default) plus the
- * application's choices documented in canfdi_app.c. Cannot fail for
- * non-NULL. */
-void canfdi_app_default_cal(canfdi_app_cal_t *cal);
-
 /*
- * Copies cal, initialises every module, starts an operation cycle of the
- * DTC memory (after an optional NVM load by the caller: see
- * canfdi_app_dtc()). Returns CANFDI_OK or -CANFDI_EINVAL (a module refused
- * its configuration; app unusable). Cost: init time only (divisions).
+ * Copies cal, initialises every module, starts an operation cycle of a
+ * cleared DTC memory: canfdi_app_power_up without an image. Returns
+ * CANFDI_OK or -CANFDI_EINVAL (a module refused its configuration; app
+ * unusable). Cost: init time only (divisions).
  */
 int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us);
+
+/*
+ * Cold start: canfdi_app_init, then the DTC memory from image[0..len-1]
+ * (a canfdi_dtc_serialize image, e.g. read back from NVM; none when len is
+ * 0 or image NULL) and a new operation cycle. Returns CANFDI_OK,
+ * CANFDI_APP_IMAGE_REJECTED (the image was not usable; the memory starts
+ * cleared and the app runs) or -CANFDI_EINVAL (calibration refused).
+ */
+int32_t canfdi_app_power_up(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us,
+                            const uint8_t *image, uint32_t len);
+
+/*
+ * Power-down (ignition off, shutdown): ends the operation cycle and writes
+ * the DTC memory's image into image[0..cap-1] for the port to store.
+ * Returns its length (> 0), -CANFDI_ERANGE (cap too small:
+ * CANFDI_DTC_IMAGE_MAX_BYTES always suffices) or -CANFDI_EINVAL. The app
+ * must be powered up again before the next step.
+ */
+int32_t canfdi_app_power_down(canfdi_app_t *app, uint8_t *image, uint32_t cap);
+
+/* The DTC memory's image now (a periodic store while running; the cycle
+ * goes on). Returns the length or a negative error as power_down. */
+int32_t canfdi_app_nvm_image(const canfdi_app_t *app, uint8_t *image, uint32_t cap);
+
+/* Changes to the DTC memory's persistent state so far (wraps; store when it
+ * differs from the value at the last store). 0 for NULL. */
+uint32_t canfdi_app_nvm_changes(const canfdi_app_t *app);
+
+/* A new operation cycle without a restart (ignition off and on while the
+ * ECU stays powered). Returns CANFDI_OK or -CANFDI_EINVAL. */
+int32_t canfdi_app_new_cycle(canfdi_app_t *app);
+
+/* ClearDiagnosticInformation: group is a DTC, a group of canfdi_dtc_clear
+ * or CANFDI_DTC_GROUP_ALL. Returns the canfdi_dtc_clear result. */
+int32_t canfdi_app_clear_dtc(canfdi_app_t *app, uint32_t group);
 
 /* One received frame (forwarded to the input supervision). Returns the
  * canfdi_rx_frame result. Cost: see canfdi_rx.h. */
@@ -221,8 +258,11 @@ void canfdi_app_deadline_miss(canfdi_app_t *app);
  */
 void canfdi_app_port_timing(canfdi_app_t *app, uint32_t step_us, uint32_t cycle_us);
 
-/* The trouble-code memory (read access, NVM load/store by the port). */
-canfdi_dtc_t *canfdi_app_dtc(canfdi_app_t *app);
+/* The trouble-code memory, read-only (NULL for NULL). */
+const canfdi_dtc_t *canfdi_app_dtc(const canfdi_app_t *app);
+
+/* The uptime in ms (core/canfdi_uptime.h); 0 for NULL. */
+uint64_t canfdi_app_uptime_ms(const canfdi_app_t *app);
 
 const canfdi_app_diag_t *canfdi_app_diag(const canfdi_app_t *app);
 

@@ -104,7 +104,8 @@
  *   for each received frame: canfdi_rx_frame(&rx, id, data, dlc, t_rx_us);
  *   optionally canfdi_rx_set_estimate(&rx, CANFDI_RX_IN_..., model_q16);
  *   canfdi_rx_step(&rx, now_us);
- *   use rx.in[], feed rx.report to the DTC memory.
+ *   read the inputs with canfdi_rx_valid/usable/fresh/value, feed rx.report
+ *   to the DTC memory.
  *
  * Scaling and overflow: raw -> Q16.16 with canfdi_rx_raw_to_q16() (int64_t
  * accumulator, half-up rounding, saturation to int32_t; every input within
@@ -270,7 +271,8 @@ typedef struct {
   bool fresh;          /* accepted since the last step */
 } canfdi_rx_signal_state_t;
 
-/* Instance, caller-owned (static). Read in[], report and diag directly;
+/* Instance, caller-owned (static). Read the inputs through
+ * canfdi_rx_valid/usable/fresh/value below, report and diag directly;
  * change the rest only through the functions. */
 typedef struct {
   canfdi_rx_cfg_t cfg;
@@ -329,6 +331,40 @@ int canfdi_rx_set_estimate(canfdi_rx_t *rx, unsigned input, int32_t value_q16);
  * Cost: see the header.
  */
 int canfdi_rx_step(canfdi_rx_t *rx, uint32_t now_us);
+
+/*
+ * The verdicts of the last canfdi_rx_step on input i (CANFDI_RX_IN_*), the
+ * way the rest of the firmware reads them:
+ *   canfdi_rx_valid    VALID (a measured, accepted, recent value)
+ *   canfdi_rx_usable   VALID or SUBSTITUTED (a value fit for control)
+ *   canfdi_rx_fresh    VALID and a new sample arrived since the last step
+ *   canfdi_rx_value    the value (defined for every quality, see above)
+ * i must be < CANFDI_RX_IN_COUNT (asserted); before the first step every
+ * input is INVALID with its default value. Cost: O(1), inline.
+ */
+static inline bool canfdi_rx_valid(const canfdi_rx_t *rx, unsigned i)
+{
+  CANFDI_ASSERT((rx != NULL) && (i < (unsigned)CANFDI_RX_IN_COUNT));
+  return rx->in[i].quality == (uint8_t)CANFDI_RX_VALID;
+}
+
+static inline bool canfdi_rx_usable(const canfdi_rx_t *rx, unsigned i)
+{
+  CANFDI_ASSERT((rx != NULL) && (i < (unsigned)CANFDI_RX_IN_COUNT));
+  return rx->in[i].quality != (uint8_t)CANFDI_RX_INVALID;
+}
+
+static inline bool canfdi_rx_fresh(const canfdi_rx_t *rx, unsigned i)
+{
+  CANFDI_ASSERT((rx != NULL) && (i < (unsigned)CANFDI_RX_IN_COUNT));
+  return rx->in[i].fresh;
+}
+
+static inline int32_t canfdi_rx_value(const canfdi_rx_t *rx, unsigned i)
+{
+  CANFDI_ASSERT((rx != NULL) && (i < (unsigned)CANFDI_RX_IN_COUNT));
+  return rx->in[i].value_q16;
+}
 
 /*
  * Result of monitor `mon` in the last step, ready for canfdi_debounce_step:

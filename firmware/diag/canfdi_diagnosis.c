@@ -3,84 +3,19 @@
  */
 #include "diag/canfdi_diagnosis.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_qconst.h"
 
-#define Q16_ONE 65536
-#define COMP_DCM 0U
-#define COMP_THR 1U
 #define STEPS_MAX 10000U
 #define PAR_THR_MIN 66       /* 0.001 in Q16.16 */
 #define PAR_THR_MAX 655360   /* 10.0 */
-#define PATTERN_LEN 13U
 
-/*
- * Model rules. pattern: one character per channel of the component, spaces
- * ignored: '+' '-' '0' supporting, 'P' 'N' 'Z' necessary, '.' don't care.
- * Keep one rule per line in this exact layout: tests/dbc/
- * test_diagnosis_rules.py reads these lines to compare them with the
- * measured symptom table.
- */
-typedef struct {
-  uint8_t fault;
-  uint8_t comp;    /* COMP_DCM / COMP_THR */
-  uint8_t bipolar; /* pattern or its negation */
-  char pattern[PATTERN_LEN];
-} rule_t;
-
-/* clang-format off */
-static const rule_t model_rules[] = {
-  /*  fault                                   comp      bi  r1r2r3r4 RA Psi J Mc JPsi UAC */
-  { CANFDI_FAULT_DCM_RA_UP,               COMP_DCM, 0U, "+Z.+ PZ.. .0" },
-  { CANFDI_FAULT_DCM_FLUX_DOWN,           COMP_DCM, 0U, "N++- 0N.. P0" },
-  { CANFDI_FAULT_DCM_FRICTION_UP,         COMP_DCM, 0U, "ZPP+ 00.+ .0" },
-  { CANFDI_FAULT_DCM_IA_SENSOR_OFFSET,    COMP_DCM, 1U, "NPPZ .... 00" },
-  { CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN,   COMP_DCM, 1U, "N.Z- 0-.. N0" },
-  { CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, COMP_DCM, 1U, "-ZZ- 0N.. ZZ" },
-  { CANFDI_FAULT_DCM_UA_SENSOR_OFFSET,    COMP_DCM, 1U, "+Z0+ 0+.. 0P" },
-  /*  fault                                   comp      bi  CORR ARM POS1 POS2 R K spring friction */
-  { CANFDI_FAULT_THR_TPS1_DRIFT,          COMP_THR, 1U, "PZPZ .... .." },
-  { CANFDI_FAULT_THR_TPS2_DRIFT,          COMP_THR, 1U, "PZZN .... .." },
-  { CANFDI_FAULT_THR_SPRING_WEAK,         COMP_THR, 0U, "ZZ.. 0ZNZ .." },
-  { CANFDI_FAULT_THR_FRICTION_UP,         COMP_THR, 0U, "ZZ.. 0Z.P .." },
-  { CANFDI_FAULT_THR_MOTOR_R_UP,          COMP_THR, 0U, "Z+.. P0.. .." },
-  { CANFDI_FAULT_THR_MOTOR_OPEN,          COMP_THR, 0U, "0P-- NN.. .." },
-  { CANFDI_FAULT_THR_JAMMED,              COMP_THR, 1U, "ZZPP 00.. .." },
-};
-/* clang-format on */
-#define N_MODEL_RULES (sizeof(model_rules) / sizeof(model_rules[0]))
-
-/* Hard rules on the (persistent) flags. A rule cannot run while any of
- * its `untested` raw flags is set this step (its input is INVALID: never
- * received or lost): it then reports nothing, so the trouble code's
- * testNotCompletedThisOperationCycle stays set (ISO 14229-1) instead of a
- * pass judged from a stale range result. */
-typedef struct {
-  uint8_t fault;
-  uint8_t comp;
-  uint16_t req;      /* all of these */
-  uint16_t forbid;   /* none of these */
-  uint32_t untested; /* any of these (raw, this step): not testable */
-} hard_rule_t;
-
-static const hard_rule_t hard_rules[] = {
-    {CANFDI_FAULT_DCM_BRIDGE_A_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_A_DEAD, CANFDI_SYM_F_BRIDGE_B_DEAD, 0U},
-    {CANFDI_FAULT_DCM_BRIDGES_DEAD, COMP_DCM, CANFDI_SYM_F_BRIDGE_B_DEAD, 0U, 0U},
-    {CANFDI_FAULT_THR_TPS1_OPEN, COMP_THR, CANFDI_SYM_F_TPS1_LOW, CANFDI_SYM_F_TPS2_LOW, CANFDI_SYM_F_TPS1_INVALID},
-    {CANFDI_FAULT_THR_TPS1_SHORT, COMP_THR, CANFDI_SYM_F_TPS1_HIGH, 0U, CANFDI_SYM_F_TPS1_INVALID},
-    {CANFDI_FAULT_THR_TPS2_OPEN, COMP_THR, CANFDI_SYM_F_TPS2_LOW, CANFDI_SYM_F_TPS1_LOW, CANFDI_SYM_F_TPS2_INVALID},
-    {CANFDI_FAULT_THR_TPS2_SHORT, COMP_THR, CANFDI_SYM_F_TPS2_HIGH, 0U, CANFDI_SYM_F_TPS2_INVALID},
-    {CANFDI_FAULT_THR_TPS_BOTH_LOST, COMP_THR, CANFDI_SYM_F_TPS1_LOW | CANFDI_SYM_F_TPS2_LOW, 0U,
-     CANFDI_SYM_F_TPS1_INVALID | CANFDI_SYM_F_TPS2_INVALID},
-    {CANFDI_FAULT_THR_TPS1_DRIFT, COMP_THR, CANFDI_SYM_F_TPS1_OUTLIER, CANFDI_SYM_F_TPS2_OUTLIER, 0U},
-    {CANFDI_FAULT_THR_TPS2_DRIFT, COMP_THR, CANFDI_SYM_F_TPS2_OUTLIER, CANFDI_SYM_F_TPS1_OUTLIER, 0U},
-    {CANFDI_FAULT_THR_MOTOR_OPEN, COMP_THR, CANFDI_SYM_F_THR_NO_CURRENT, 0U, 0U},
-    {CANFDI_FAULT_THR_JAMMED, COMP_THR, CANFDI_SYM_F_THR_NOT_FOLLOWING, CANFDI_SYM_F_THR_NO_CURRENT, 0U},
-};
-#define N_HARD_RULES (sizeof(hard_rules) / sizeof(hard_rules[0]))
-
+/* The rule tables are generated from dbc/diag_rules.csv
+ * (diag/gen/canfdi_diag_rules.c). */
 CANFDI_STATIC_ASSERT(CANFDI_FAULT_COUNT <= 32U, fault_ids_fit_the_mask);
-CANFDI_STATIC_ASSERT(N_MODEL_RULES == CANFDI_DIAG_N_RULES, rule_count_matches_the_header);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_FLAGS <= 16U, flags_fit_uint16);
+CANFDI_STATIC_ASSERT(CANFDI_DIAG_COMP_THR < CANFDI_DIAG_N_COMP, components_fit);
 
 /* Test verdicts while combining a hard and a model rule of one fault. */
 #define V_NA 0U   /* no such test */
@@ -92,9 +27,9 @@ static uint8_t comp_of_catalogue(uint8_t component)
 {
   uint8_t c = 0xFFU;
   if (component == CANFDI_COMPONENT_DC_MOTOR) {
-    c = (uint8_t)COMP_DCM;
+    c = (uint8_t)CANFDI_DIAG_COMP_DCM;
   } else if (component == CANFDI_COMPONENT_THROTTLE) {
-    c = (uint8_t)COMP_THR;
+    c = (uint8_t)CANFDI_DIAG_COMP_THR;
   } else {
     /* no diagnosis for other components */
   }
@@ -119,9 +54,9 @@ static bool par_ok(int32_t t)
 void canfdi_diagnosis_default_cfg(canfdi_diagnosis_cfg_t *cfg)
 {
   if (cfg != NULL) {
-    cfg->on_q16 = Q16_ONE;
+    cfg->on_q16 = CANFDI_Q16_ONE;
     cfg->off_q16 = 52429; /* 0.8 */
-    cfg->weight_cap_q16 = 4 * Q16_ONE;
+    cfg->weight_cap_q16 = 4 * CANFDI_Q16_ONE;
     cfg->sym_on_steps = 20U;
     cfg->sym_off_steps = 50U;
     cfg->flag_on_steps = 10U;
@@ -166,8 +101,8 @@ int32_t canfdi_diagnosis_cfg_check(const canfdi_diagnosis_cfg_t *cfg)
   uint32_t i;
   if (cfg == NULL) {
     rc = -CANFDI_EINVAL;
-  } else if ((cfg->off_q16 <= 0) || (cfg->off_q16 > cfg->on_q16) || (cfg->on_q16 > 16 * Q16_ONE) ||
-             (cfg->weight_cap_q16 < Q16_ONE) || (cfg->weight_cap_q16 > 16 * Q16_ONE) ||
+  } else if ((cfg->off_q16 <= 0) || (cfg->off_q16 > cfg->on_q16) || (cfg->on_q16 > 16 * CANFDI_Q16_ONE) ||
+             (cfg->weight_cap_q16 < CANFDI_Q16_ONE) || (cfg->weight_cap_q16 > 16 * CANFDI_Q16_ONE) ||
              !steps_ok(cfg->sym_on_steps) || !steps_ok(cfg->sym_off_steps) ||
              !steps_ok(cfg->flag_on_steps) || !steps_ok(cfg->flag_off_steps) ||
              !steps_ok(cfg->isolate_steps) || (cfg->conf_min_pct > 100U) || (cfg->margin_pct > 100U) ||
@@ -215,12 +150,12 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
 }
 
 /* Pattern string -> masks (init only). */
-static void compile_rule(const rule_t *r, canfdi_diagnosis_rule_t *m)
+static void compile_rule(const canfdi_diag_model_rule_t *r, canfdi_diagnosis_rule_t *m)
 {
   uint32_t j = 0U;
   uint32_t k;
   *m = (canfdi_diagnosis_rule_t){0};
-  for (k = 0U; (k < PATTERN_LEN) && (r->pattern[k] != '\0') && (j < CANFDI_DIAG_N_CH); k++) {
+  for (k = 0U; (k < CANFDI_DIAG_PATTERN_LEN) && (r->pattern[k] != '\0') && (j < CANFDI_DIAG_N_CH); k++) {
     const char e = r->pattern[k];
     const uint16_t b = (uint16_t)(1U << j);
     if (e != ' ') {
@@ -252,14 +187,14 @@ int32_t canfdi_diagnosis_init(canfdi_diagnosis_t *d, const canfdi_diagnosis_cfg_
       d->cfg = *cfg;
       for (i = 0U; i < CANFDI_SYM_N_PAR; i++) {
         /* 2^32 / threshold: x = dev * inv / 2^16 is dev / threshold in Q16.16 */
-        d->inv_pos_q16[COMP_DCM][i] = canfdi_div_s32_qn(Q16_ONE, cfg->dcm_par_pos_q16[i], 16U);
-        d->inv_neg_q16[COMP_DCM][i] = canfdi_div_s32_qn(Q16_ONE, cfg->dcm_par_neg_q16[i], 16U);
-        d->inv_pos_q16[COMP_THR][i] = canfdi_div_s32_qn(Q16_ONE, cfg->thr_par_pos_q16[i], 16U);
-        d->inv_neg_q16[COMP_THR][i] = canfdi_div_s32_qn(Q16_ONE, cfg->thr_par_neg_q16[i], 16U);
+        d->inv_pos_q16[CANFDI_DIAG_COMP_DCM][i] = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->dcm_par_pos_q16[i], 16U);
+        d->inv_neg_q16[CANFDI_DIAG_COMP_DCM][i] = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->dcm_par_neg_q16[i], 16U);
+        d->inv_pos_q16[CANFDI_DIAG_COMP_THR][i] = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->thr_par_pos_q16[i], 16U);
+        d->inv_neg_q16[CANFDI_DIAG_COMP_THR][i] = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->thr_par_neg_q16[i], 16U);
       }
-      d->inv_jpsi_q16 = canfdi_div_s32_qn(Q16_ONE, cfg->jpsi_q16, 16U);
-      for (i = 0U; i < N_MODEL_RULES; i++) {
-        compile_rule(&model_rules[i], &d->rule[i]);
+      d->inv_jpsi_q16 = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->jpsi_q16, 16U);
+      for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+        compile_rule(&canfdi_diag_model_rules[i], &d->rule[i]);
       }
       d->diag = (canfdi_diagnosis_diag_t){0};
       d->initialised = true;
@@ -342,13 +277,13 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
   bool v;
   int32_t x;
   for (i = 0U; i < CANFDI_SYM_N_RES; i++) {
-    channel(d, COMP_DCM, i, s->dcm_rn_q16[i], (s->dcm_rn_valid & (1U << i)) != 0U);
-    channel(d, COMP_THR, i, s->thr_rn_q16[i], (s->thr_rn_valid & (1U << i)) != 0U);
+    channel(d, CANFDI_DIAG_COMP_DCM, i, s->dcm_rn_q16[i], (s->dcm_rn_valid & (1U << i)) != 0U);
+    channel(d, CANFDI_DIAG_COMP_THR, i, s->thr_rn_q16[i], (s->thr_rn_valid & (1U << i)) != 0U);
   }
   for (i = 0U; i < CANFDI_SYM_N_PAR; i++) {
-    channel(d, COMP_DCM, CANFDI_SYM_N_RES + i, par_norm(d, COMP_DCM, i, s->dcm_pdev_q16[i]),
+    channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_SYM_N_RES + i, par_norm(d, CANFDI_DIAG_COMP_DCM, i, s->dcm_pdev_q16[i]),
             (s->dcm_pdev_valid & (1U << i)) != 0U);
-    channel(d, COMP_THR, CANFDI_SYM_N_RES + i, par_norm(d, COMP_THR, i, s->thr_pdev_q16[i]),
+    channel(d, CANFDI_DIAG_COMP_THR, CANFDI_SYM_N_RES + i, par_norm(d, CANFDI_DIAG_COMP_THR, i, s->thr_pdev_q16[i]),
             (s->thr_pdev_valid & (1U << i)) != 0U);
   }
   v = ((s->dcm_pdev_valid & (1U << CANFDI_SYM_DCM_P_J)) != 0U) &&
@@ -356,11 +291,11 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
   x = canfdi_mul_s32_qn(canfdi_sub_s32_sat(s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J],
                                            s->dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI]),
                         d->inv_jpsi_q16, 16U);
-  channel(d, COMP_DCM, CANFDI_DIAG_CH_DCM_JPSI, x, v);
-  channel(d, COMP_DCM, CANFDI_DIAG_CH_DCM_UAC, s->dcm_ua_cmd_rn_q16,
+  channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_DIAG_CH_DCM_JPSI, x, v);
+  channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_DIAG_CH_DCM_UAC, s->dcm_ua_cmd_rn_q16,
           (s->flags & CANFDI_SYM_F_DCM_UA_CMD_VALID) != 0U);
-  channel(d, COMP_THR, 8U, 0, false);
-  channel(d, COMP_THR, 9U, 0, false);
+  channel(d, CANFDI_DIAG_COMP_THR, 8U, 0, false);
+  channel(d, CANFDI_DIAG_COMP_THR, 9U, 0, false);
   for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
     const int8_t t = ((s->flags & ((uint32_t)1U << i)) != 0U) ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO;
     pers_step(&d->flag[i], true, t, d->cfg.flag_on_steps, d->cfg.flag_off_steps);
@@ -379,7 +314,7 @@ static uint32_t flags_now(const canfdi_diagnosis_t *d)
   return f;
 }
 
-static bool hard_fires(const hard_rule_t *h, uint32_t f)
+static bool hard_fires(const canfdi_diag_hard_rule_t *h, uint32_t f)
 {
   return ((f & h->req) == h->req) && ((f & h->forbid) == 0U);
 }
@@ -395,7 +330,7 @@ static void observe(canfdi_diagnosis_t *d, uint32_t c)
   for (j = 0U; j < CANFDI_DIAG_N_CH; j++) {
     const int8_t st = d->ch[c][j].state;
     const uint16_t b = (uint16_t)(1U << j);
-    uint32_t w = (uint32_t)Q16_ONE;
+    uint32_t w = (uint32_t)CANFDI_Q16_ONE;
     if (st == CANFDI_DIAG_SYM_POS) {
       pos = (uint16_t)(pos | b);
     } else if (st == CANFDI_DIAG_SYM_NEG) {
@@ -412,7 +347,7 @@ static void observe(canfdi_diagnosis_t *d, uint32_t c)
       /* unknown: in none of the masks */
     }
     if ((st == CANFDI_DIAG_SYM_POS) || (st == CANFDI_DIAG_SYM_NEG)) {
-      w = (uint32_t)canfdi_clamp_s32(abs_sat(d->x_q16[c][j]), Q16_ONE, d->cfg.weight_cap_q16);
+      w = (uint32_t)canfdi_clamp_s32(abs_sat(d->x_q16[c][j]), CANFDI_Q16_ONE, d->cfg.weight_cap_q16);
     }
     d->w_q16[j] = w;
   }
@@ -462,8 +397,8 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
   res->best_pct = 0U;
   res->second = 0U;
   res->second_pct = 0U;
-  for (i = 0U; i < N_MODEL_RULES; i++) {
-    const rule_t *r = &model_rules[i];
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    const canfdi_diag_model_rule_t *r = &canfdi_diag_model_rules[i];
     if (r->comp == c) {
       uint32_t pct = 0U;
       uint32_t p2 = 0U;
@@ -497,11 +432,6 @@ static bool rule_testable(const canfdi_diagnosis_t *d, uint32_t i)
   return (d->rule[i].nec & ~(uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero)) == 0U;
 }
 
-static uint32_t sat_inc(uint32_t x)
-{
-  return (x < UINT32_MAX) ? (x + 1U) : x;
-}
-
 static void fill_none(int8_t report[])
 {
   uint32_t i;
@@ -510,141 +440,194 @@ static void fill_none(int8_t report[])
   }
 }
 
+/* Per-fault verdicts of one step (V_*), hard and model rules apart. */
+typedef struct {
+  uint8_t hv[CANFDI_FAULT_COUNT]; /* hard-rule verdict per fault */
+  uint8_t mv[CANFDI_FAULT_COUNT]; /* model-rule verdict per fault */
+  bool hard_any[CANFDI_DIAG_N_COMP];
+} verdicts_t;
+
+/* Phase 1: the hard rules on this step's persistent flags. */
+static void hard_phase(const canfdi_symptoms_t *s, uint32_t flags, verdicts_t *v)
+{
+  uint32_t i;
+  for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
+    const canfdi_diag_hard_rule_t *h = &canfdi_diag_hard_rules[i];
+    if ((s->flags & h->untested) != 0U) {
+      v->hv[h->fault] = V_NONE;
+    } else if (hard_fires(h, flags)) {
+      v->hv[h->fault] = V_FAIL;
+      v->hard_any[h->comp] = true;
+    } else {
+      v->hv[h->fault] = V_PASS;
+    }
+  }
+}
+
+/* The component's model rules all get verdict `mv`, except that the
+ * isolated fault (if any) fails. */
+static void model_verdicts(uint32_t c, uint8_t mv, uint8_t isolated, verdicts_t *v)
+{
+  uint32_t i;
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    if (canfdi_diag_model_rules[i].comp == c) {
+      v->mv[canfdi_diag_model_rules[i].fault] = ((isolated != 0U) && (canfdi_diag_model_rules[i].fault == isolated)) ? V_FAIL : mv;
+    }
+  }
+}
+
+static void clear_result(canfdi_diagnosis_t *d, uint32_t c, uint8_t id, uint8_t pct)
+{
+  canfdi_diagnosis_result_t *res = &d->res[c];
+  res->best = id;
+  res->best_pct = pct;
+  res->second = 0U;
+  res->second_pct = 0U;
+  res->isolated = id;
+  res->confidence_pct = pct;
+  res->not_isolated = false;
+  d->win_n[c] = 0U;
+  d->win_id[c] = 0U;
+}
+
+/* A hard rule fired in component c: the flagged fault breaks the models'
+ * assumptions, so no model verdicts. */
+static void component_hard(canfdi_diagnosis_t *d, uint32_t c, bool prev_hard, verdicts_t *v)
+{
+  uint8_t hard_id = 0U;
+  uint32_t i;
+  for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
+    if ((canfdi_diag_hard_rules[i].comp == c) && (v->hv[canfdi_diag_hard_rules[i].fault] == V_FAIL) && (hard_id == 0U)) {
+      hard_id = canfdi_diag_hard_rules[i].fault;
+    }
+  }
+  clear_result(d, c, hard_id, 100U);
+  if (!prev_hard) {
+    canfdi_count_inc(&d->diag.hard_fires);
+  }
+  model_verdicts(c, V_NONE, 0U, v);
+}
+
+/* Nothing detected in component c: every testable model rule passes. */
+static void component_quiet(canfdi_diagnosis_t *d, uint32_t c, verdicts_t *v)
+{
+  uint32_t i;
+  clear_result(d, c, 0U, 0U);
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    if (canfdi_diag_model_rules[i].comp == c) {
+      v->mv[canfdi_diag_model_rules[i].fault] = rule_testable(d, i) ? V_PASS : V_NONE;
+    }
+  }
+}
+
+/* Something detected: rank the candidates; the winner is isolated after
+ * isolate_steps consecutive wins. */
+static void component_match(canfdi_diagnosis_t *d, uint32_t c, uint8_t prev_isolated, verdicts_t *v)
+{
+  canfdi_diagnosis_result_t *res = &d->res[c];
+  uint8_t winner = 0U;
+  rank(d, c);
+  if ((res->best != 0U) && (res->best_pct >= d->cfg.conf_min_pct) &&
+      (((uint32_t)res->best_pct) >= ((uint32_t)res->second_pct + d->cfg.margin_pct))) {
+    winner = res->best;
+  }
+  if ((winner != 0U) && (winner == d->win_id[c])) {
+    if (d->win_n[c] < UINT16_MAX) {
+      d->win_n[c]++;
+    }
+  } else {
+    d->win_id[c] = winner;
+    d->win_n[c] = (winner != 0U) ? 1U : 0U;
+  }
+  if ((winner != 0U) && (d->win_n[c] >= d->cfg.isolate_steps)) {
+    res->isolated = winner;
+    res->confidence_pct = res->best_pct;
+    if (prev_isolated != winner) {
+      canfdi_count_inc(&d->diag.isolations);
+    }
+  } else {
+    res->isolated = 0U;
+    res->confidence_pct = 0U;
+  }
+  res->not_isolated = (res->isolated == 0U);
+  if (res->not_isolated) {
+    canfdi_count_inc(&d->diag.unisolated_steps);
+  }
+  model_verdicts(c, V_NONE, res->isolated, v);
+}
+
+/* Phase 2: per component, hard rule, quiet or matching. */
+static void component_phase(canfdi_diagnosis_t *d, verdicts_t *v)
+{
+  uint32_t c;
+  for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+    canfdi_diagnosis_result_t *res = &d->res[c];
+    const uint8_t prev_isolated = res->isolated;
+    const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (v->hv[prev_isolated] == V_FAIL);
+    observe(d, c);
+    res->detected = v->hard_any[c] || ((d->obs_pos | d->obs_neg) != 0U);
+    if (v->hard_any[c]) {
+      component_hard(d, c, prev_hard, v);
+    } else if (!res->detected) {
+      component_quiet(d, c, v);
+    } else {
+      component_match(d, c, prev_isolated, v);
+    }
+  }
+}
+
+/* Phase 3: one report per fault; FAILED if either test failed, PASSED only
+ * if every test it has ran and passed. */
+static void report_phase(canfdi_diagnosis_t *d, const verdicts_t *v, int8_t report[])
+{
+  uint32_t i;
+  d->failed_mask = 0U;
+  for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+    const uint8_t hv = v->hv[i];
+    const uint8_t mv = v->mv[i];
+    int8_t r = CANFDI_DIAG_REPORT_NONE;
+    if ((hv == V_FAIL) || (mv == V_FAIL)) {
+      r = CANFDI_DIAG_REPORT_FAILED;
+      d->failed_mask |= ((uint32_t)1U << i);
+    } else if (((hv == V_PASS) || (hv == V_NA)) && ((mv == V_PASS) || (mv == V_NA)) &&
+               ((hv != V_NA) || (mv != V_NA))) {
+      r = CANFDI_DIAG_REPORT_PASSED;
+    } else {
+      /* not tested in this step */
+    }
+    if (report != NULL) {
+      report[i] = r;
+    }
+  }
+}
+
 void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
 {
-  uint8_t hv[CANFDI_FAULT_COUNT]; /* hard-rule verdict per fault, V_* */
-  uint8_t mv[CANFDI_FAULT_COUNT]; /* model-rule verdict per fault */
-  bool hard_any[CANFDI_DIAG_N_COMP] = {false, false};
-  uint32_t f;
-  uint32_t i;
-  uint32_t c;
   if ((d == NULL) || !d->initialised || (s == NULL)) {
     if ((d != NULL) && d->initialised) {
-      d->diag.rejected = sat_inc(d->diag.rejected);
+      canfdi_count_inc(&d->diag.rejected);
     }
     if (report != NULL) {
       fill_none(report);
     }
   } else {
-    d->diag.steps = sat_inc(d->diag.steps);
+    verdicts_t v;
+    uint32_t i;
+    canfdi_count_inc(&d->diag.steps);
     update_channels(d, s);
-    f = flags_now(d);
     for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-      hv[i] = V_NA;
-      mv[i] = V_NA;
+      v.hv[i] = V_NA;
+      v.mv[i] = V_NA;
     }
-    for (i = 0U; i < N_HARD_RULES; i++) {
-      const hard_rule_t *h = &hard_rules[i];
-      if ((s->flags & h->untested) != 0U) {
-        hv[h->fault] = V_NONE;
-      } else if (hard_fires(h, f)) {
-        hv[h->fault] = V_FAIL;
-        hard_any[h->comp] = true;
-      } else {
-        hv[h->fault] = V_PASS;
-      }
+    for (i = 0U; i < CANFDI_DIAG_N_COMP; i++) {
+      v.hard_any[i] = false;
     }
-    for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
-      canfdi_diagnosis_result_t *res = &d->res[c];
-      const uint8_t prev_isolated = res->isolated;
-      const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (hv[prev_isolated] == V_FAIL);
-      uint8_t hard_id = 0U;
-      for (i = 0U; i < N_HARD_RULES; i++) {
-        if ((hard_rules[i].comp == c) && (hv[hard_rules[i].fault] == V_FAIL) && (hard_id == 0U)) {
-          hard_id = hard_rules[i].fault;
-        }
-      }
-      observe(d, c);
-      res->detected = hard_any[c] || ((d->obs_pos | d->obs_neg) != 0U);
-      if (hard_any[c]) {
-        /* the flagged fault breaks the models' assumptions: no model verdicts */
-        res->best = hard_id;
-        res->best_pct = 100U;
-        res->second = 0U;
-        res->second_pct = 0U;
-        res->isolated = hard_id;
-        res->confidence_pct = 100U;
-        res->not_isolated = false;
-        d->win_n[c] = 0U;
-        d->win_id[c] = 0U;
-        if (!prev_hard) {
-          d->diag.hard_fires = sat_inc(d->diag.hard_fires);
-        }
-        for (i = 0U; i < N_MODEL_RULES; i++) {
-          if (model_rules[i].comp == c) {
-            mv[model_rules[i].fault] = V_NONE;
-          }
-        }
-      } else if (!res->detected) {
-        res->best = 0U;
-        res->best_pct = 0U;
-        res->second = 0U;
-        res->second_pct = 0U;
-        res->isolated = 0U;
-        res->confidence_pct = 0U;
-        res->not_isolated = false;
-        d->win_n[c] = 0U;
-        d->win_id[c] = 0U;
-        for (i = 0U; i < N_MODEL_RULES; i++) {
-          if (model_rules[i].comp == c) {
-            mv[model_rules[i].fault] = rule_testable(d, i) ? V_PASS : V_NONE;
-          }
-        }
-      } else {
-        uint8_t winner = 0U;
-        rank(d, c);
-        if ((res->best != 0U) && (res->best_pct >= d->cfg.conf_min_pct) &&
-            (((uint32_t)res->best_pct) >= ((uint32_t)res->second_pct + d->cfg.margin_pct))) {
-          winner = res->best;
-        }
-        if ((winner != 0U) && (winner == d->win_id[c])) {
-          if (d->win_n[c] < UINT16_MAX) {
-            d->win_n[c]++;
-          }
-        } else {
-          d->win_id[c] = winner;
-          d->win_n[c] = (winner != 0U) ? 1U : 0U;
-        }
-        if ((winner != 0U) && (d->win_n[c] >= d->cfg.isolate_steps)) {
-          res->isolated = winner;
-          res->confidence_pct = res->best_pct;
-          if (prev_isolated != winner) {
-            d->diag.isolations = sat_inc(d->diag.isolations);
-          }
-        } else {
-          res->isolated = 0U;
-          res->confidence_pct = 0U;
-        }
-        res->not_isolated = (res->isolated == 0U);
-        if (res->not_isolated) {
-          d->diag.unisolated_steps = sat_inc(d->diag.unisolated_steps);
-        }
-        for (i = 0U; i < N_MODEL_RULES; i++) {
-          if (model_rules[i].comp == c) {
-            mv[model_rules[i].fault] = (model_rules[i].fault == res->isolated) ? V_FAIL : V_NONE;
-          }
-        }
-      }
-    }
-    d->corr_not_isolated = !hard_any[COMP_THR] && (d->res[COMP_THR].isolated == 0U) &&
-                           ((d->ch[COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_POS) ||
-                            (d->ch[COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_NEG));
-    d->failed_mask = 0U;
-    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-      int8_t r = CANFDI_DIAG_REPORT_NONE;
-      if ((hv[i] == V_FAIL) || (mv[i] == V_FAIL)) {
-        r = CANFDI_DIAG_REPORT_FAILED;
-        d->failed_mask |= ((uint32_t)1U << i);
-      } else if (((hv[i] == V_PASS) || (hv[i] == V_NA)) && ((mv[i] == V_PASS) || (mv[i] == V_NA)) &&
-                 ((hv[i] != V_NA) || (mv[i] != V_NA))) {
-        r = CANFDI_DIAG_REPORT_PASSED;
-      } else {
-        /* not tested in this step */
-      }
-      if (report != NULL) {
-        report[i] = r;
-      }
-    }
+    hard_phase(s, flags_now(d), &v);
+    component_phase(d, &v);
+    d->corr_not_isolated = !v.hard_any[CANFDI_DIAG_COMP_THR] && (d->res[CANFDI_DIAG_COMP_THR].isolated == 0U) &&
+                           ((d->ch[CANFDI_DIAG_COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_POS) ||
+                            (d->ch[CANFDI_DIAG_COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_NEG));
+    report_phase(d, &v, report);
   }
 }
 

@@ -11,7 +11,7 @@
  * the threshold, sign kept); parameter deviations are (estimate - nominal) /
  * nominal in Q16.16 (6554 ~ +10 %). A quantity whose valid bit is clear must
  * be ignored (not converged, excluded, or not computed in this mode).
- * Memory: 84 bytes on a 32-bit target. Cost: none (data only).
+ * Memory: 76 bytes on a 32-bit target. Cost: none (data only).
  */
 #ifndef CANFDI_SYMPTOMS_H
 #define CANFDI_SYMPTOMS_H
@@ -41,7 +41,9 @@
 #define CANFDI_SYM_THR_P_FRICTION 3U
 #define CANFDI_SYM_N_PAR 4U
 
-/* Signal-based and manager symptoms, bits of canfdi_symptoms_t.flags. */
+/* Signal-based and manager symptoms, bits of canfdi_symptoms_t.flags.
+ * Bits 0..CANFDI_DIAG_N_FLAGS-1 get the diagnosis' persistence (they name
+ * faults through its hard rules); the others are read raw, per step. */
 #define CANFDI_SYM_F_TPS1_LOW (1UL << 0)        /* TPS1 below its range */
 #define CANFDI_SYM_F_TPS1_HIGH (1UL << 1)       /* TPS1 above its range */
 #define CANFDI_SYM_F_TPS2_LOW (1UL << 2)
@@ -52,18 +54,13 @@
 #define CANFDI_SYM_F_BRIDGE_B_DEAD (1UL << 7)
 #define CANFDI_SYM_F_THR_NOT_FOLLOWING (1UL << 8) /* position does not follow the command */
 #define CANFDI_SYM_F_THR_NO_CURRENT (1UL << 9)  /* voltage applied, no motor current */
-#define CANFDI_SYM_F_DCM_STEADY (1UL << 10)     /* quasi-static operating point */
-#define CANFDI_SYM_F_THR_STEADY (1UL << 11)
-#define CANFDI_SYM_F_DCM_EXCITED (1UL << 12)    /* estimators see enough excitation */
-#define CANFDI_SYM_F_THR_EXCITED (1UL << 13)
-#define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 14) /* dcm_ua_cmd_rn_q16 valid */
-#define CANFDI_SYM_F_TPS1_INVALID (1UL << 15)   /* TPS1 input INVALID this step (never
+#define CANFDI_SYM_F_TPS1_INVALID (1UL << 10)   /* TPS1 input INVALID this step (never
                                                  * received or lost): its range test
                                                  * cannot run */
-#define CANFDI_SYM_F_TPS2_INVALID (1UL << 16)
+#define CANFDI_SYM_F_TPS2_INVALID (1UL << 11)
+#define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 12) /* dcm_ua_cmd_rn_q16 valid */
 
 typedef struct {
-  uint32_t now_ms;
   int32_t dcm_rn_q16[CANFDI_SYM_N_RES];
   int32_t thr_rn_q16[CANFDI_SYM_N_RES];
   int32_t dcm_pdev_q16[CANFDI_SYM_N_PAR];
@@ -73,13 +70,12 @@ typedef struct {
   uint8_t dcm_pdev_valid; /* bit i: dcm_pdev_q16[i] valid (converged) */
   uint8_t thr_pdev_valid;
   uint32_t flags;         /* CANFDI_SYM_F_* */
-  int32_t thr_track_err_rad_q16; /* voted angle - setpoint, filtered */
-  /* Added for canfdi_diagnosis (helper 15): measured U_A minus the bridge
-   * command applied over the same interval, filtered, / its threshold
-   * (Q16.16, 1.0 = threshold). It is the one signal that tells a U_A sensor
-   * offset from an omega sensor offset: in the armature equation the two
-   * are the same term. Valid when CANFDI_SYM_F_DCM_UA_CMD_VALID is set
-   * (bridge driving, command not clamped, U_A valid). */
+  /* Measured U_A minus the bridge command applied over the same interval,
+   * filtered, / its threshold (Q16.16, 1.0 = threshold; the actuator
+   * monitor UAC, detect/canfdi_actmon.h). It is the one signal that tells
+   * a U_A sensor offset from a speed-sensor offset: in the armature
+   * equation the two are the same term. Valid when
+   * CANFDI_SYM_F_DCM_UA_CMD_VALID is set. */
   int32_t dcm_ua_cmd_rn_q16;
 } canfdi_symptoms_t;
 

@@ -4,7 +4,9 @@
  */
 #include "ft/canfdi_actmgr.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_qconst.h"
 
 CANFDI_STATIC_ASSERT(CANFDI_FAULT_COUNT <= 32U, fault_ids_fit_a_uint32_bitset);
 CANFDI_STATIC_ASSERT((CANFDI_ACTMGR_DCM_FAULTS & CANFDI_ACTMGR_THR_FAULTS) == 0U,
@@ -14,14 +16,7 @@ CANFDI_STATIC_ASSERT(CANFDI_ACTMGR_UA_HIST >= 1U && CANFDI_ACTMGR_UA_HIST <= 255
 CANFDI_STATIC_ASSERT(CANFDI_ACTMGR_REASON_FAIL_SILENT < CANFDI_DEGRADE_CLEAR_TESTER,
                      actmgr_reasons_below_clear_causes);
 
-#define Q16_ONE 65536
 
-static void inc_sat(uint32_t *c)
-{
-  if (*c < UINT32_MAX) {
-    *c += 1U;
-  }
-}
 
 /* Keep the safest (state, reason); the first reason wins among equals. */
 static void consider(uint8_t *state, uint8_t *reason, uint8_t s, uint8_t r)
@@ -41,7 +36,7 @@ static void catalogue_target(uint32_t set, uint8_t *state, uint8_t *reason)
   *reason = CANFDI_FAULT_NONE;
   /* stops after the highest set bit: no cost without faults */
   for (id = 1U; (id < CANFDI_FAULT_COUNT) && ((set >> id) != 0U); id++) {
-    if ((set & CANFDI_ACTMGR_FAULT_BIT(id)) != 0U) {
+    if ((set & CANFDI_FAULT_BIT(id)) != 0U) {
       consider(state, reason, canfdi_catalogue_fault[id].degradation, (uint8_t)id);
     }
   }
@@ -75,7 +70,7 @@ static void consecutive_cfg(canfdi_debounce_cfg_t *c, uint16_t n)
 static bool cfg_ok(const canfdi_actmgr_cfg_t *c)
 {
   return (c->dcm_u_max_V_q16 > 0) && (c->dcm_check_min_V_q16 > 0) &&
-         (c->dcm_deliver_ratio_q16 > 0) && (c->dcm_deliver_ratio_q16 < Q16_ONE) &&
+         (c->dcm_deliver_ratio_q16 > 0) && (c->dcm_deliver_ratio_q16 < CANFDI_Q16_ONE) &&
          (c->dcm_lag_min_steps >= 1U) && (c->dcm_lag_min_steps <= c->dcm_lag_max_steps) &&
          (c->dcm_lag_max_steps <= CANFDI_ACTMGR_UA_HIST) && (c->dcm_bridge_fail_steps >= 1U) &&
          (c->dcm_bridge_fail_steps <= 32767U) && (c->thr_u_max_V_q16 > 0) &&
@@ -85,13 +80,13 @@ static bool cfg_ok(const canfdi_actmgr_cfg_t *c)
 void canfdi_actmgr_default_cfg(canfdi_actmgr_cfg_t *cfg)
 {
   if (cfg != NULL) {
-    cfg->dcm_u_max_V_q16 = 60 * Q16_ONE;
-    cfg->dcm_check_min_V_q16 = 6 * Q16_ONE;
-    cfg->dcm_deliver_ratio_q16 = Q16_ONE / 2;
+    cfg->dcm_u_max_V_q16 = 60 * CANFDI_Q16_ONE;
+    cfg->dcm_check_min_V_q16 = 6 * CANFDI_Q16_ONE;
+    cfg->dcm_deliver_ratio_q16 = CANFDI_Q16_ONE / 2;
     cfg->dcm_lag_min_steps = 1U;
     cfg->dcm_lag_max_steps = 1U;
     cfg->dcm_bridge_fail_steps = 3U;
-    cfg->thr_u_max_V_q16 = 16 * Q16_ONE;
+    cfg->thr_u_max_V_q16 = 16 * CANFDI_Q16_ONE;
     cfg->thr_vote_loss_steps = 20U;
   }
 }
@@ -171,7 +166,7 @@ static void check_bridge(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in)
 {
   const canfdi_actmgr_cfg_t *c = &m->cfg;
   bool evaluate = in->dcm_ua_valid &&
-                  ((in->faults & CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_UA_SENSOR_OFFSET)) == 0U) &&
+                  ((in->faults & CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_UA_SENSOR_OFFSET)) == 0U) &&
                   (m->hist_count >= c->dcm_lag_max_steps);
   bool explained = false;
   uint8_t bridge = CANFDI_ACTMGR_BRIDGE_NONE;
@@ -204,10 +199,10 @@ static void check_bridge(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in)
         &m->bridge_deb[b], explained ? CANFDI_DEB_REPORT_PREPASSED : CANFDI_DEB_REPORT_PREFAILED);
     CANFDI_ASSERT(st >= 0);
     if (!explained) {
-      inc_sat(&m->diag.ua_implausible);
+      canfdi_count_inc(&m->diag.ua_implausible);
       if (st == (int32_t)CANFDI_DEB_FAILED) {
         m->bridge_failed[b] = true;
-        m->detected |= CANFDI_ACTMGR_FAULT_BIT((b == 0U) ? CANFDI_FAULT_DCM_BRIDGE_A_DEAD
+        m->detected |= CANFDI_FAULT_BIT((b == 0U) ? CANFDI_FAULT_DCM_BRIDGE_A_DEAD
                                                          : CANFDI_FAULT_DCM_BRIDGES_DEAD);
       }
     }
@@ -225,10 +220,10 @@ static void step_dcm(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in, canfdi_ac
   canfdi_actmgr_hist_t *h;
 
   check_bridge(m, in);
-  if ((f & CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGE_A_DEAD)) != 0U) {
+  if ((f & CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGE_A_DEAD)) != 0U) {
     m->bridge_failed[0] = true;
   }
-  if ((f & CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGES_DEAD)) != 0U) {
+  if ((f & CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGES_DEAD)) != 0U) {
     m->bridge_failed[0] = true;
     m->bridge_failed[1] = true;
   }
@@ -262,10 +257,10 @@ static void step_dcm(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in, canfdi_ac
   out->bridge_switched = (m->active_bridge == CANFDI_ACTMGR_BRIDGE_A) &&
                          (bridge == CANFDI_ACTMGR_BRIDGE_B);
   if (out->bridge_switched) {
-    inc_sat(&m->diag.bridge_switches);
+    canfdi_count_inc(&m->diag.bridge_switches);
   }
   if ((bridge == CANFDI_ACTMGR_BRIDGE_NONE) && (m->active_bridge != CANFDI_ACTMGR_BRIDGE_NONE)) {
-    inc_sat(&m->diag.drive_offs);
+    canfdi_count_inc(&m->diag.drive_offs);
   }
   m->active_bridge = bridge;
 
@@ -275,7 +270,7 @@ static void step_dcm(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in, canfdi_ac
     out->dcm.u_cmd_V_q16 =
         canfdi_clamp_s32(in->dcm_u_ctrl_V_q16, -c->dcm_u_max_V_q16, c->dcm_u_max_V_q16);
     if (out->dcm.u_cmd_V_q16 != in->dcm_u_ctrl_V_q16) {
-      inc_sat(&m->diag.dcm_clamps);
+      canfdi_count_inc(&m->diag.dcm_clamps);
     }
   } else {
     out->dcm.u_cmd_V_q16 = 0;
@@ -284,6 +279,13 @@ static void step_dcm(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in, canfdi_ac
                    !out->dcm.enable;
   out->dcm_track_V_q16 = out->dcm.u_cmd_V_q16;
   out->dcm_ctrl_mode = ctrl_mode(out->dcm.enable, out->dcm_track);
+  if (in->dcm_hold_off && out->dcm.enable) {
+    out->dcm.enable = false;
+    out->dcm.u_cmd_V_q16 = 0;
+    out->dcm_track = true;
+    out->dcm_track_V_q16 = 0;
+    out->dcm_ctrl_mode = CANFDI_CTRL_TRACK;
+  }
   out->dcm_state = state;
   out->dcm_reason = canfdi_degrade_reason(&m->dcm_deg);
 
@@ -307,7 +309,7 @@ static uint8_t tps_reason(uint32_t faults, const canfdi_vote_out_t *vote, uint32
   uint32_t i;
   bool found = false;
   for (i = 0U; (i < 3U) && !found; i++) {
-    if ((faults & CANFDI_ACTMGR_FAULT_BIT(named[k][i])) != 0U) {
+    if ((faults & CANFDI_FAULT_BIT(named[k][i])) != 0U) {
       r = named[k][i];
       found = true;
     }
@@ -355,7 +357,7 @@ static void step_thr(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
     consider(&target, &reason, CANFDI_DEG_DEGRADED, CANFDI_ACTMGR_REASON_MODEL_ISOLATED);
   }
   if ((vote->newly_isolated & tps_mask) != 0U) {
-    m->detected |= CANFDI_ACTMGR_FAULT_BIT(((vote->newly_isolated & CANFDI_VOTE_BIT_TPS1) != 0U)
+    m->detected |= CANFDI_FAULT_BIT(((vote->newly_isolated & CANFDI_VOTE_BIT_TPS1) != 0U)
                                                ? CANFDI_FAULT_THR_TPS1_DRIFT
                                                : CANFDI_FAULT_THR_TPS2_DRIFT);
   }
@@ -369,7 +371,7 @@ static void step_thr(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
 
   off = (state >= CANFDI_DEG_FAIL_SAFE);
   if (off && !m->thr_off) {
-    inc_sat(&m->diag.limp_homes);
+    canfdi_count_inc(&m->diag.limp_homes);
   }
   m->thr_off = off;
   out->thr.enable = !off;
@@ -379,13 +381,20 @@ static void step_thr(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
     out->thr.u_cmd_V_q16 =
         canfdi_clamp_s32(in->thr_u_ctrl_V_q16, -c->thr_u_max_V_q16, c->thr_u_max_V_q16);
     if (out->thr.u_cmd_V_q16 != in->thr_u_ctrl_V_q16) {
-      inc_sat(&m->diag.thr_clamps);
+      canfdi_count_inc(&m->diag.thr_clamps);
     }
   }
   out->thr_limp_home = off;
   out->thr_track = off || (out->thr.u_cmd_V_q16 != in->thr_u_ctrl_V_q16);
   out->thr_track_V_q16 = out->thr.u_cmd_V_q16;
   out->thr_ctrl_mode = ctrl_mode(out->thr.enable, out->thr_track);
+  if (in->thr_hold_off && out->thr.enable) {
+    out->thr.enable = false;
+    out->thr.u_cmd_V_q16 = 0;
+    out->thr_track = true;
+    out->thr_track_V_q16 = 0;
+    out->thr_ctrl_mode = CANFDI_CTRL_TRACK;
+  }
   out->thr_state = state;
   out->thr_reason = canfdi_degrade_reason(&m->thr_deg);
 }
@@ -421,20 +430,20 @@ int32_t canfdi_actmgr_step(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
       out_safe(out);
     }
     if ((m != NULL) && m->initialised) {
-      inc_sat(&m->diag.rejected);
+      canfdi_count_inc(&m->diag.rejected);
     }
   } else {
     step_dcm(m, in, out);
     step_thr(m, in, vote, out);
     out->detected = m->detected;
-    inc_sat(&m->diag.steps);
+    canfdi_count_inc(&m->diag.steps);
     rc = CANFDI_OK;
   }
   return rc;
 }
 
 int32_t canfdi_actmgr_clear(canfdi_actmgr_t *m, uint32_t subsystems, uint8_t cause,
-                            uint32_t faults, uint32_t now_ms)
+                            uint32_t faults, uint64_t now_ms)
 {
   int32_t rc = -CANFDI_EINVAL;
   if ((m != NULL) && m->initialised && (subsystems != 0U) &&
@@ -448,9 +457,9 @@ int32_t canfdi_actmgr_clear(canfdi_actmgr_t *m, uint32_t subsystems, uint8_t cau
       if (canfdi_degrade_clear(&m->dcm_deg, cause, st > CANFDI_DEG_NORMAL, now_ms) == CANFDI_OK) {
         reset_dcm(m);
         done |= CANFDI_ACTMGR_SUB_DCM;
-        inc_sat(&m->diag.clears);
+        canfdi_count_inc(&m->diag.clears);
       } else {
-        inc_sat(&m->diag.clears_refused);
+        canfdi_count_inc(&m->diag.clears_refused);
       }
     }
     if ((subsystems & CANFDI_ACTMGR_SUB_THR) != 0U) {
@@ -458,14 +467,14 @@ int32_t canfdi_actmgr_clear(canfdi_actmgr_t *m, uint32_t subsystems, uint8_t cau
       if (canfdi_degrade_clear(&m->thr_deg, cause, st > CANFDI_DEG_NORMAL, now_ms) == CANFDI_OK) {
         reset_thr(m);
         done |= CANFDI_ACTMGR_SUB_THR;
-        inc_sat(&m->diag.clears);
+        canfdi_count_inc(&m->diag.clears);
       } else {
-        inc_sat(&m->diag.clears_refused);
+        canfdi_count_inc(&m->diag.clears_refused);
       }
     }
     rc = (int32_t)done;
   } else if ((m != NULL) && m->initialised) {
-    inc_sat(&m->diag.rejected);
+    canfdi_count_inc(&m->diag.rejected);
   } else {
     /* nothing to count in */
   }

@@ -8,7 +8,8 @@
  * from ft/canfdi_vote.h): the controllers' voltage commands, the validated
  * armature-voltage and supply measurements, the diagnosis result as a
  * bitset of confirmed/isolated fault ids (bit i = catalogue fault id i,
- * CANFDI_ACTMGR_FAULT_BIT), an application fail-silent request and the time.
+ * CANFDI_FAULT_BIT), the start-up hold-offs, an application fail-silent
+ * request and the time.
  * Outputs (canfdi_actmgr_out_t): per subsystem the actuator command (enable,
  * bridge select, voltage after the manager), the degradation state and its
  * reason, "controller must track" with the value to track, and the faults
@@ -98,6 +99,15 @@
  * ratchet, ft/canfdi_degrade.h). Otherwise enable 1 and the controller's
  * command, limited to +-thr_u_max.
  *
+ * Start-up hold-off (dcm_hold_off, thr_hold_off): the application holds a
+ * drive off until its plant's inputs were valid once (a sensor node may
+ * boot after this ECU). While held off the actuator is off, enable 0 and
+ * command 0, without a degradation (no fault, no state change); the bridge
+ * selection stays as decided, "must track" is raised with 0 and the
+ * controller mode is TRACK (the controller may run; it tracks 0). The
+ * history of applied commands records the drive as off, so the bridge
+ * check never judges a held-off bridge.
+ *
  * Both subsystems: the application's fail_silent request -> FAIL_SILENT
  * (reason FAIL_SILENT), actuators off. Commands are limited to +-u_max
  * (then "must track" is raised too, counted as a clamp). "Must track"
@@ -138,8 +148,8 @@
  *   window 1..4, a clear every 2nd step
  * Code: 2278 bytes (M0+). Stack: 80 bytes (-fstack-usage, M0+) plus
  * callees (<= 40).
- * Memory: sizeof(canfdi_actmgr_t) = 384 bytes on a 32-bit target (two
- * degradation states 2 x 100, three debouncers, two debounce configs,
+ * Memory: sizeof(canfdi_actmgr_t) = 544 bytes on a 32-bit target (two
+ * degradation states 2 x 176, three debouncers, two debounce configs,
  * history 4 x 8, config, diagnostics). The instance holds pointers into
  * itself (debouncer configs): do not copy it after init. No heap.
  */
@@ -173,43 +183,40 @@
 #define CANFDI_ACTMGR_REASON_MODEL_ISOLATED 0x84U
 #define CANFDI_ACTMGR_REASON_FAIL_SILENT 0x85U    /* application request */
 
-/* Fault-id bitset. */
-#define CANFDI_ACTMGR_FAULT_BIT(id) ((uint32_t)1U << (id))
-
 /* Which catalogue faults belong to which subsystem (comm faults by frame). */
-#define CANFDI_ACTMGR_DCM_FAULTS                                                     \
-  (CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_RA_UP) |                                 \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_FLUX_DOWN) |                             \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_FRICTION_UP) |                           \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_IA_SENSOR_OFFSET) |                      \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN) |                     \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET) |                   \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_UA_SENSOR_OFFSET) |                      \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGE_A_DEAD) |                         \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGES_DEAD) |                          \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_DCM_TIMEOUT) |                           \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_DCM_COUNTER) |                           \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_DCM_CRC) |                               \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_DCM_LENGTH) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_DCM_IMPLAUSIBLE))
-#define CANFDI_ACTMGR_THR_FAULTS                                                     \
-  (CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_TPS1_OPEN) |                             \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_TPS1_SHORT) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_TPS2_OPEN) |                             \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_TPS2_SHORT) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_TPS1_DRIFT) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_TPS2_DRIFT) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_SPRING_WEAK) |                           \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_FRICTION_UP) |                           \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_MOTOR_R_UP) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_MOTOR_OPEN) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_JAMMED) |                                \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_THR_TPS_BOTH_LOST) |                         \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_THR_TIMEOUT) |                           \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_THR_COUNTER) |                           \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_THR_CRC) |                               \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_THR_LENGTH) |                            \
-   CANFDI_ACTMGR_FAULT_BIT(CANFDI_FAULT_COM_THR_IMPLAUSIBLE))
+#define CANFDI_ACTMGR_DCM_FAULTS                                                \
+  (CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_RA_UP) |                                   \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_FLUX_DOWN) |                               \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_FRICTION_UP) |                             \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_IA_SENSOR_OFFSET) |                        \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN) |                       \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET) |                     \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_UA_SENSOR_OFFSET) |                        \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGE_A_DEAD) |                           \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGES_DEAD) |                            \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_DCM_TIMEOUT) |                             \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_DCM_COUNTER) |                             \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_DCM_CRC) |                                 \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_DCM_LENGTH) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_DCM_IMPLAUSIBLE))
+#define CANFDI_ACTMGR_THR_FAULTS                                                \
+  (CANFDI_FAULT_BIT(CANFDI_FAULT_THR_TPS1_OPEN) |                               \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_TPS1_SHORT) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_TPS2_OPEN) |                               \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_TPS2_SHORT) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_TPS1_DRIFT) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_TPS2_DRIFT) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_SPRING_WEAK) |                             \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_FRICTION_UP) |                             \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_MOTOR_R_UP) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_MOTOR_OPEN) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_JAMMED) |                                  \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_THR_TPS_BOTH_LOST) |                           \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_THR_TIMEOUT) |                             \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_THR_COUNTER) |                             \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_THR_CRC) |                                 \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_THR_LENGTH) |                              \
+   CANFDI_FAULT_BIT(CANFDI_FAULT_COM_THR_IMPLAUSIBLE))
 
 /* Configuration (copied at init; domain checked there). */
 typedef struct {
@@ -232,7 +239,9 @@ typedef struct {
   int32_t thr_u_ctrl_V_q16;  /* position controller output, V */
   uint32_t faults;           /* confirmed/isolated fault ids, bit i = id i */
   bool fail_silent;          /* application request for both subsystems */
-  uint32_t now_ms;           /* time for the degradation records */
+  bool dcm_hold_off;         /* DC motor not to be energised yet (start-up) */
+  bool thr_hold_off;         /* throttle not to be energised yet (start-up) */
+  uint64_t now_ms;           /* uptime for the degradation records */
 } canfdi_actmgr_in_t;
 
 typedef struct {
@@ -304,7 +313,7 @@ typedef struct {
 } canfdi_actmgr_t;
 
 /*
- * Defaults for the plants of the design brief: dcm_u_max 60 V and
+ * Defaults for the plants of docs/design.md: dcm_u_max 60 V and
  * thr_u_max 16 V (the ranges of DcmUaCmd / ThrUCmd in the DBC; the bridges
  * clamp to their supply themselves), check_min 6 V, deliver_ratio 0.5,
  * lag window 1..1 (lockstep SIL), bridge_fail_steps 3,
@@ -338,7 +347,7 @@ int32_t canfdi_actmgr_step(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
  * Cost: O(1) plus a scan of the bitset.
  */
 int32_t canfdi_actmgr_clear(canfdi_actmgr_t *m, uint32_t subsystems, uint8_t cause,
-                            uint32_t faults, uint32_t now_ms);
+                            uint32_t faults, uint64_t now_ms);
 
 /* The degradation states, for their logs and counters (NULL for NULL). */
 const canfdi_degrade_t *canfdi_actmgr_degrade_dcm(const canfdi_actmgr_t *m);

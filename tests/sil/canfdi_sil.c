@@ -311,11 +311,10 @@ static bool ecu_filter_passes(uint32_t id)
 static int apply_action(const canfdi_sim_action_t *a, const canfdi_app_cal_t *cal, uint32_t now_us,
                         bool quiet, char *msg, size_t cap)
 {
-  canfdi_dtc_t *dtc = canfdi_app_dtc(&app);
   int rc = 0;
   msg[0] = '\0';
   if (a->kind == (uint8_t)CANFDI_SIM_ACT_CYCLE) {
-    if ((canfdi_dtc_cycle_end(dtc) != CANFDI_OK) || (canfdi_dtc_cycle_start(dtc) != CANFDI_OK)) {
+    if (canfdi_app_new_cycle(&app) != CANFDI_OK) {
       (void)snprintf(msg, cap, "cycle at %.3f s: the DTC memory refused cycle_end/cycle_start",
                      (double)a->t_us * 1e-6);
       rc = -1;
@@ -325,7 +324,7 @@ static int apply_action(const canfdi_sim_action_t *a, const canfdi_app_cal_t *ca
     }
   } else if (a->kind == (uint8_t)CANFDI_SIM_ACT_CLEAR) {
     const uint32_t group = (a->code[0] != '\0') ? code_to_dtc(a->code) : CANFDI_DTC_GROUP_ALL;
-    if (canfdi_dtc_clear(dtc, group) != CANFDI_OK) {
+    if (canfdi_app_clear_dtc(&app, group) != CANFDI_OK) {
       (void)snprintf(msg, cap, "clear %s at %.3f s: refused by the DTC memory",
                      (a->code[0] != '\0') ? a->code : "all", (double)a->t_us * 1e-6);
       rc = -1;
@@ -334,30 +333,25 @@ static int apply_action(const canfdi_sim_action_t *a, const canfdi_app_cal_t *ca
              (a->code[0] != '\0') ? a->code : "(all groups)");
     }
   } else {
-    /* power_cycle: shutdown as canfdi-ecu --nvm does it (end the cycle,
-     * store), a cold start of the whole application, then the boot
-     * sequence of canfdi_dtc.h (load into a memory without an active
-     * cycle, start one). */
+    /* power_cycle: the application's power-down (end the cycle, the image
+     * to store), the store and load through the NVM port as canfdi-ecu
+     * --nvm does it, and a cold start with the loaded image */
     static uint8_t img[CANFDI_DTC_IMAGE_MAX_BYTES];
-    int32_t n;
-    (void)canfdi_dtc_cycle_end(dtc);
-    n = canfdi_dtc_serialize(dtc, img, (uint32_t)sizeof img);
+    int32_t n = canfdi_app_power_down(&app, img, (uint32_t)sizeof img);
     if ((n < 0) || (canfdi_nvm_store(&sil_nvm, img, (uint32_t)n) != CANFDI_OK)) {
       (void)snprintf(msg, cap, "power_cycle at %.3f s: storing the DTC memory failed",
                      (double)a->t_us * 1e-6);
       rc = -1;
-    } else if (canfdi_app_init(&app, cal, now_us) != CANFDI_OK) {
-      (void)snprintf(msg, cap, "power_cycle at %.3f s: the firmware refused its calibration",
-                     (double)a->t_us * 1e-6);
-      rc = -1;
     } else {
+      int32_t up;
       memset(img, 0, sizeof img);
       n = canfdi_nvm_load(&sil_nvm, img, (uint32_t)sizeof img);
-      if ((n < 0) || (canfdi_dtc_cycle_end(dtc) != CANFDI_OK) ||
-          (canfdi_dtc_deserialize(dtc, img, (uint32_t)n) != CANFDI_OK) ||
-          (canfdi_dtc_cycle_start(dtc) != CANFDI_OK)) {
-        (void)snprintf(msg, cap, "power_cycle at %.3f s: loading the DTC memory failed (%d)",
-                       (double)a->t_us * 1e-6, (int)n);
+      up = (n >= 0) ? canfdi_app_power_up(&app, cal, now_us, img, (uint32_t)n) : -CANFDI_EIO;
+      if (up != CANFDI_OK) {
+        (void)snprintf(msg, cap, "power_cycle at %.3f s: %s (%d)", (double)a->t_us * 1e-6,
+                       (up == CANFDI_APP_IMAGE_REJECTED) ? "the DTC image was rejected"
+                                                         : "loading the DTC memory failed",
+                       (int)n);
         rc = -1;
       } else if (!quiet) {
         printf("  %8.3f  ecu: power cycle (DTC memory stored to NVM, %d bytes, application "

@@ -78,8 +78,8 @@ START_TEST(test_no_sensor_frames)
   for (k = 1U; k < (cal.rx.first_timeout_us / 1000U); k++) {
     ck_assert_int_ge(canfdi_app_step(&app, k * 1000U, out), 2);
     ck_assert_uint_eq(canfdi_dtc_count_by_mask(canfdi_app_dtc(&app), (uint8_t)CANFDI_DTC_ST_TF), 0U);
-    ck_assert(!app.mgr_out.dcm.enable);
-    ck_assert(!app.mgr_out.thr.enable);
+    ck_assert(!app.fb.mgr.dcm.enable);
+    ck_assert(!app.fb.mgr.thr.enable);
   }
   for (; k <= (cal.rx.first_timeout_us / 1000U) + 200U; k++) {
     ck_assert_int_ge(canfdi_app_step(&app, k * 1000U, out), 2);
@@ -91,10 +91,10 @@ START_TEST(test_no_sensor_frames)
   st = canfdi_dtc_status(canfdi_app_dtc(&app),
                          (uint8_t)canfdi_dtc_find(canfdi_app_dtc(&app), CANFDI_DTC_U1A01));
   ck_assert_uint_ne((uint32_t)st & CANFDI_DTC_ST_TF, 0U);
-  ck_assert(!app.mgr_out.dcm.enable);
-  ck_assert_uint_eq(app.mgr_out.dcm_state, CANFDI_DEG_FAIL_SAFE);
-  ck_assert(!app.mgr_out.thr.enable);
-  ck_assert_uint_eq(app.mgr_out.thr_state, CANFDI_DEG_FAIL_SAFE);
+  ck_assert(!app.fb.mgr.dcm.enable);
+  ck_assert_uint_eq(app.fb.mgr.dcm_state, CANFDI_DEG_FAIL_SAFE);
+  ck_assert(!app.fb.mgr.thr.enable);
+  ck_assert_uint_eq(app.fb.mgr.thr_state, CANFDI_DEG_FAIL_SAFE);
   /* a sensor-frame DTC is never confirmed without its monitor failing */
   st = canfdi_dtc_status(canfdi_app_dtc(&app),
                          (uint8_t)canfdi_dtc_find(canfdi_app_dtc(&app), CANFDI_DTC_U1A20));

@@ -692,7 +692,7 @@ static void guard_nvm(void)
   sink32(canfdi_nvm_load(&nvm, buf, 16U));
 }
 
-/* comm/canfdi_rx + comm/canfdi_tx (helper 10): input supervision and the
+/* comm/canfdi_rx + comm/canfdi_tx: input supervision and the
  * transmit side. */
 static void guard_rx(void)
 {
@@ -713,7 +713,8 @@ static void guard_rx(void)
   sinku64(canfdi_rx_monitor_fault_id(in_n));
   sinku64(canfdi_rx_monitor_dtc(in_n));
   sink32(canfdi_rx_raw_to_q16(in_s32[1], in_s64[0], in_s64[1]));
-  sink32(rx.in[CANFDI_RX_IN_DCM_IA].value_q16 + (int32_t)rx.in[CANFDI_RX_IN_DCM_IA].quality);
+  sink32(canfdi_rx_value(&rx, in_n % CANFDI_RX_IN_COUNT) + (canfdi_rx_valid(&rx, 0U) ? 1 : 0) +
+         (canfdi_rx_usable(&rx, 1U) ? 2 : 0) + (canfdi_rx_fresh(&rx, 2U) ? 4 : 0));
   sinku64((uint64_t)rx.report.prefailed + rx.diag.frames);
 }
 
@@ -771,6 +772,13 @@ static void guard_app(void)
   sinku64((uint64_t)canfdi_app_dtc(&app)->changes);
   d = canfdi_app_diag(&app);
   sinku64((uint64_t)d->steps + d->deadline_misses + out[0].data[0]);
+  sink32(canfdi_app_new_cycle(&app));
+  sink32(canfdi_app_clear_dtc(&app, in_u32));
+  sink32(canfdi_app_nvm_image(&app, guard_buf, in_u32));
+  sinku64(canfdi_app_nvm_changes(&app) + canfdi_app_uptime_ms(&app));
+  sink32(canfdi_app_power_down(&app, guard_buf, in_u32));
+  sink32(canfdi_app_power_up(&app, &cal, in_u32, guard_buf, in_n));
+  sinku64(canfdi_actmon_diag(&app.actmon).steps);
 }
 
 /* Fault-symptom reasoning (firmware/diag/canfdi_diagnosis). */
@@ -794,13 +802,11 @@ static void guard_diagnosis(void)
     sym.dcm_pdev_q16[i] = in_s32[(i + 2U) % 3U];
     sym.thr_pdev_q16[i] = in_s32[i % 3U];
   }
-  sym.now_ms = in_u32;
   sym.dcm_rn_valid = (uint8_t)in_n;
   sym.thr_rn_valid = (uint8_t)in_n;
   sym.dcm_pdev_valid = (uint8_t)in_n;
   sym.thr_pdev_valid = (uint8_t)in_n;
   sym.flags = in_u32;
-  sym.thr_track_err_rad_q16 = in_s32[0];
   sym.dcm_ua_cmd_rn_q16 = in_s32[1];
   canfdi_diagnosis_step(&dg, &sym, rep);
   sinku64((uint64_t)canfdi_diagnosis_isolated(&dg, CANFDI_COMPONENT_DC_MOTOR, &conf) + conf);

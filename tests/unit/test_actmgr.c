@@ -28,7 +28,7 @@
 #include "unit_main.h"
 
 #define Q16(x) ((int32_t)lround((x) * 65536.0))
-#define BIT(id) CANFDI_ACTMGR_FAULT_BIT(id)
+#define BIT(id) CANFDI_FAULT_BIT(id)
 
 static double v_of_q16(int32_t q) { return (double)q / 65536.0; }
 

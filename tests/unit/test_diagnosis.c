@@ -90,11 +90,10 @@ static double noise(void)
   return ((double)(lcg >> 8) / 8388608.0) - 1.0;
 }
 
-static void build(canfdi_symptoms_t *s, const vec_t *v, uint32_t k, double rn_noise, double p_noise)
+static void build(canfdi_symptoms_t *s, const vec_t *v, double rn_noise, double p_noise)
 {
   uint32_t i;
   memset(s, 0, sizeof(*s));
-  s->now_ms = k;
   for (i = 0U; i < 4U; i++) {
     s->dcm_rn_q16[i] = Q16(v->dcm_r[i] + (rn_noise * noise()));
     s->thr_rn_q16[i] = Q16(v->thr_r[i] + (rn_noise * noise()));
@@ -149,7 +148,7 @@ START_TEST(test_j_excursion_not_speed_gain)
   uint32_t k;
   setup();
   for (k = 0U; k < 2000U; k++) {
-    build(&s, (k < 1000U) ? &fault_free : &j_excursion, k, 0.3, 0.0);
+    build(&s, (k < 1000U) ? &fault_free : &j_excursion, 0.3, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
     ck_assert_msg(count_failed() == 0U, "step %u: %u faults FAILED (isolated %u)", k, count_failed(),
                   canfdi_diagnosis_isolated(&dg, DCM, NULL));
@@ -171,12 +170,12 @@ START_TEST(test_isolates_each_fault)
   setup();
   /* 1 s fault-free, then the fault for 1 s */
   for (k = 0U; k < 1000U; k++) {
-    build(&s, &fault_free, k, 0.3, 0.002);
+    build(&s, &fault_free, 0.3, 0.002);
     canfdi_diagnosis_step(&dg, &s, rep);
     ck_assert_uint_eq(count_failed(), 0U);
   }
   for (k = 0U; k < 1000U; k++) {
-    build(&s, v, k, 0.3, 0.002);
+    build(&s, v, 0.3, 0.002);
     canfdi_diagnosis_step(&dg, &s, rep);
     if ((rep[v->fault] == CANFDI_DIAG_REPORT_FAILED) && (first == UINT32_MAX)) {
       first = k;
@@ -236,7 +235,7 @@ START_TEST(test_fault_free_passes)
   uint32_t f;
   setup();
   for (k = 0U; k < 5000U; k++) {
-    build(&s, &fault_free, k, 0.79, 0.002);
+    build(&s, &fault_free, 0.79, 0.002);
     canfdi_diagnosis_step(&dg, &s, rep);
     ck_assert_uint_eq(count_failed(), 0U);
     ck_assert(!canfdi_diagnosis_result(&dg, DCM)->detected);
@@ -265,7 +264,7 @@ START_TEST(test_invalid_input_not_tested)
   uint32_t k;
   setup();
   for (k = 0U; k < 100U; k++) {
-    build(&s, &tps1_lost, k, 0.0, 0.0);
+    build(&s, &tps1_lost, 0.0, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
   ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS1_OPEN], CANFDI_DIAG_REPORT_NONE);
@@ -273,7 +272,7 @@ START_TEST(test_invalid_input_not_tested)
   ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS_BOTH_LOST], CANFDI_DIAG_REPORT_NONE);
   ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS2_OPEN], CANFDI_DIAG_REPORT_PASSED);
   for (k = 0U; k < 100U; k++) {
-    build(&s, &tps1_lost_low, k, 0.0, 0.0);
+    build(&s, &tps1_lost_low, 0.0, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
   ck_assert_int_eq(rep[CANFDI_FAULT_THR_TPS1_OPEN], CANFDI_DIAG_REPORT_NONE);
@@ -290,7 +289,7 @@ START_TEST(test_noise_below_threshold)
   uint32_t i;
   setup();
   for (k = 0U; k < 20000U; k++) {
-    build(&s, &fault_free, k, 0.99, 0.0);
+    build(&s, &fault_free, 0.99, 0.0);
     for (i = 0U; i < 4U; i++) {
       /* 0.99 of each side's threshold */
       s.dcm_pdev_q16[i] = (noise() > 0.0) ? (int32_t)(cfg.dcm_par_pos_q16[i] * 99 / 100)
@@ -319,9 +318,9 @@ START_TEST(test_transient_burst)
   setup();
   for (b = 0U; b < 50U; b++) {
     for (k = 0U; k < 200U; k++) {
-      build(&s, &vecs[6] /* ua_offset */, k, 0.0, 0.0);
+      build(&s, &vecs[6] /* ua_offset */, 0.0, 0.0);
       if (k >= (uint32_t)(cfg.sym_on_steps - 1U)) {
-        build(&s, &fault_free, k, 0.0, 0.0);
+        build(&s, &fault_free, 0.0, 0.0);
       }
       canfdi_diagnosis_step(&dg, &s, rep);
       ck_assert_uint_eq(count_failed(), 0U);
@@ -329,7 +328,7 @@ START_TEST(test_transient_burst)
     }
   }
   for (k = 0U; k < cfg.sym_on_steps; k++) {
-    build(&s, &vecs[6], k, 0.0, 0.0);
+    build(&s, &vecs[6], 0.0, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
   ck_assert(canfdi_diagnosis_result(&dg, DCM)->detected);
@@ -344,7 +343,7 @@ START_TEST(test_cold_winding)
   uint32_t k;
   setup();
   for (k = 0U; k < 2000U; k++) {
-    build(&s, &fault_free, k, 0.3, 0.002);
+    build(&s, &fault_free, 0.3, 0.002);
     s.dcm_pdev_q16[CANFDI_SYM_DCM_P_RA] = Q16(-0.112);
     canfdi_diagnosis_step(&dg, &s, rep);
     ck_assert_uint_eq(count_failed(), 0U);
@@ -363,7 +362,7 @@ START_TEST(test_latency_exact)
   uint32_t first = UINT32_MAX;
   setup();
   for (k = 0U; k < 200U; k++) {
-    build(&s, &vecs[6], k, 0.0, 0.0);
+    build(&s, &vecs[6], 0.0, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
     if ((rep[CANFDI_FAULT_DCM_UA_SENSOR_OFFSET] == CANFDI_DIAG_REPORT_FAILED) && (first == UINT32_MAX)) {
       first = k;
@@ -376,7 +375,7 @@ START_TEST(test_latency_exact)
    * persistence), and the tests pass again */
   first = UINT32_MAX;
   for (k = 0U; k < 200U; k++) {
-    build(&s, &fault_free, k, 0.0, 0.0);
+    build(&s, &fault_free, 0.0, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
     if ((rep[CANFDI_FAULT_DCM_UA_SENSOR_OFFSET] == CANFDI_DIAG_REPORT_PASSED) && (first == UINT32_MAX)) {
       first = k;
@@ -419,7 +418,7 @@ START_TEST(test_not_isolated)
   uint32_t f;
   setup();
   for (k = 0U; k < 1000U; k++) {
-    build(&s, &a->v, k, 0.3, 0.002);
+    build(&s, &a->v, 0.3, 0.002);
     canfdi_diagnosis_step(&dg, &s, rep);
     ck_assert_msg(count_failed() == 0U, "%s: FAILED reported", a->name);
   }
@@ -449,7 +448,7 @@ START_TEST(test_hard_masks_model)
   uint32_t k;
   setup();
   for (k = 0U; k < 200U; k++) {
-    build(&s, &vecs[6], k, 0.3, 0.002);
+    build(&s, &vecs[6], 0.3, 0.002);
     s.flags |= CANFDI_SYM_F_BRIDGE_A_DEAD;
     canfdi_diagnosis_step(&dg, &s, rep);
   }
@@ -469,8 +468,8 @@ START_TEST(test_two_components)
   uint32_t k;
   setup();
   for (k = 0U; k < 300U; k++) {
-    build(&s, &vecs[0] /* ra_up */, k, 0.3, 0.002);
-    build(&t, &vecs[14] /* tps2_drift */, k, 0.3, 0.002);
+    build(&s, &vecs[0] /* ra_up */, 0.3, 0.002);
+    build(&t, &vecs[14] /* tps2_drift */, 0.3, 0.002);
     memcpy(s.thr_rn_q16, t.thr_rn_q16, sizeof(s.thr_rn_q16));
     canfdi_diagnosis_step(&dg, &s, rep);
   }
@@ -486,7 +485,7 @@ START_TEST(test_intermittent_dont_care)
   uint32_t k;
   setup();
   for (k = 0U; k < 1000U; k++) {
-    build(&s, &vecs[0], k, 0.3, 0.002);
+    build(&s, &vecs[0], 0.3, 0.002);
     s.dcm_rn_q16[CANFDI_SYM_DCM_R3] = (((k / 40U) % 2U) == 0U) ? Q16(3.0) : Q16(-3.0);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
@@ -500,7 +499,7 @@ START_TEST(test_reset_and_invalid)
   uint32_t k;
   setup();
   for (k = 0U; k < 200U; k++) {
-    build(&s, &vecs[0], k, 0.0, 0.0);
+    build(&s, &vecs[0], 0.0, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
   ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, DCM, NULL), CANFDI_FAULT_DCM_RA_UP);
@@ -508,7 +507,7 @@ START_TEST(test_reset_and_invalid)
   ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, DCM, NULL), 0U);
   ck_assert_int_eq(canfdi_diagnosis_symptom(&dg, DCM, 0U), CANFDI_DIAG_SYM_UNKNOWN);
   /* invalid residuals: nothing testable, nothing reported */
-  build(&s, &vecs[0], 0U, 0.0, 0.0);
+  build(&s, &vecs[0], 0.0, 0.0);
   s.dcm_rn_valid = 0U;
   s.dcm_pdev_valid = 0U;
   s.flags = 0U;
@@ -548,7 +547,7 @@ START_TEST(test_lagging_residual)
   uint32_t k;
   setup();
   for (k = 0U; k < 500U; k++) {
-    build(&s, &vecs[1] /* flux_down */, k, 0.3, 0.002);
+    build(&s, &vecs[1] /* flux_down */, 0.3, 0.002);
     if (k < 25U) {
       s.dcm_rn_q16[CANFDI_SYM_DCM_R4] = Q16(0.2);
     }
@@ -569,13 +568,13 @@ START_TEST(test_band_is_not_zero)
   uint32_t k;
   setup();
   for (k = 0U; k < 300U; k++) {
-    build(&s, &vecs[2] /* dcm_friction */, k, 0.0, 0.0);
+    build(&s, &vecs[2] /* dcm_friction */, 0.0, 0.0);
     s.dcm_rn_q16[CANFDI_SYM_DCM_R1] = Q16(-0.9);
     canfdi_diagnosis_step(&dg, &s, rep);
     ck_assert_msg(rep[CANFDI_FAULT_DCM_FRICTION_UP] != CANFDI_DIAG_REPORT_FAILED, "friction at step %u", k);
   }
   for (k = 300U; k < 400U; k++) {
-    build(&s, &vecs[3] /* ia_offset */, k, 0.0, 0.0);
+    build(&s, &vecs[3] /* ia_offset */, 0.0, 0.0);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
   ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_IA_SENSOR_OFFSET);
@@ -583,7 +582,7 @@ START_TEST(test_band_is_not_zero)
    * r1 has stayed below off for sym_off_steps */
   setup();
   for (k = 0U; k < 300U; k++) {
-    build(&s, &vecs[2], k, 0.0, 0.0);
+    build(&s, &vecs[2], 0.0, 0.0);
     s.dcm_rn_q16[CANFDI_SYM_DCM_R1] = Q16((k < 100U) ? -0.9 : -0.5);
     canfdi_diagnosis_step(&dg, &s, rep);
     if (k < 100U + cfg.sym_off_steps - 1U) {
@@ -619,7 +618,7 @@ START_TEST(test_partial_pattern)
   uint32_t k;
   setup();
   for (k = 0U; k < 500U; k++) {
-    build(&s, v, k, 0.3, 0.002);
+    build(&s, v, 0.3, 0.002);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
   ck_assert_msg(canfdi_diagnosis_failed_mask(&dg) == (1UL << v->fault), "%s: mask %x best %u %u%% second %u %u%%",
@@ -650,7 +649,7 @@ START_TEST(test_confidence_monotone)
     const double kdev = 0.1 * (0.5 + (0.75 * (double)m)); /* 0.5 .. 4.25 thresholds */
     setup();
     for (k = 0U; k < 300U; k++) {
-      build(&s, v, k, 0.0, 0.0);
+      build(&s, v, 0.0, 0.0);
       s.thr_pdev_q16[CANFDI_SYM_THR_P_K] = Q16(kdev);
       canfdi_diagnosis_step(&dg, &s, rep);
     }
@@ -666,7 +665,7 @@ START_TEST(test_confidence_monotone)
   cfg.conf_min_pct = 80U;
   ck_assert_int_eq(canfdi_diagnosis_init(&dg, &cfg), CANFDI_OK);
   for (k = 0U; k < 300U; k++) {
-    build(&s, v, k, 0.0, 0.0);
+    build(&s, v, 0.0, 0.0);
     s.thr_pdev_q16[CANFDI_SYM_THR_P_K] = Q16(0.425);
     canfdi_diagnosis_step(&dg, &s, rep);
   }
@@ -698,7 +697,7 @@ START_TEST(test_cfg_rejected)
   bad_cfgs[_i](&c);
   ck_assert_int_eq(canfdi_diagnosis_cfg_check(&c), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_diagnosis_init(&dg, &c), -CANFDI_EINVAL);
-  build(&s, &vecs[0], 0U, 0.0, 0.0);
+  build(&s, &vecs[0], 0.0, 0.0);
   memset(rep, 5, sizeof(rep));
   canfdi_diagnosis_step(&dg, &s, rep);
   ck_assert_int_eq(rep[CANFDI_FAULT_DCM_RA_UP], CANFDI_DIAG_REPORT_NONE);

@@ -1,0 +1,113 @@
+/*
+ * canfdi_app_power.c — the application's power and operation-cycle
+ * sequence (see canfdi_app.h): cold start with or without a stored DTC
+ * image, power-down with the image to store, a new operation cycle, a
+ * tester's clear. The Linux port (port/linux/canfdi_ecu_nvm.c) and the SIL
+ * rig (tests/sil/canfdi_sil.c) both go through these functions, so a
+ * power cycle is the same sequence everywhere.
+ */
+#include "app/canfdi_app.h"
+
+static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
+{
+  canfdi_app_cal_t *c = &app->cal;
+  int32_t rc = CANFDI_OK;
+  if ((canfdi_rx_init(&app->rx, &c->rx, now_us) != CANFDI_OK) || (canfdi_tx_init(&app->tx) != CANFDI_OK) ||
+      (canfdi_ctrl_dcm_init(&app->ctrl_dcm, &c->ctrl_dcm) != CANFDI_OK) ||
+      (canfdi_ctrl_thr_init(&app->ctrl_thr, &c->ctrl_thr) != CANFDI_OK) ||
+      (canfdi_excite_init(&app->excite_dcm, &c->excite_dcm) != CANFDI_OK) ||
+      (canfdi_excite_init(&app->excite_thr, &c->excite_thr) != CANFDI_OK) ||
+      (canfdi_parity_dcm_init(&app->parity_dcm, &c->parity_dcm) != CANFDI_OK) ||
+      (canfdi_parity_thr_init(&app->parity_thr, &c->parity_thr) != CANFDI_OK) ||
+      (canfdi_est_dcm_init(&app->est_dcm, &c->est_dcm) != CANFDI_OK) ||
+      (canfdi_est_thr_init(&app->est_thr, &c->est_thr) != CANFDI_OK) ||
+      (canfdi_limit_init(&app->tps_range[0], &c->tps_range) != CANFDI_OK) ||
+      (canfdi_limit_init(&app->tps_range[1], &c->tps_range) != CANFDI_OK) ||
+      (canfdi_vote_init(&app->vote, &c->vote) != CANFDI_OK) ||
+      (canfdi_actmon_init(&app->actmon, &c->actmon) != CANFDI_OK) ||
+      (canfdi_actmgr_init(&app->actmgr, &c->actmgr) != CANFDI_OK) ||
+      (canfdi_diagnosis_init(&app->diagnosis, &c->diagnosis) != CANFDI_OK) ||
+      (canfdi_dtc_init(&app->dtc, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT) != CANFDI_OK) ||
+      (canfdi_dtcroute_init(&app->dtcroute, &c->dtcroute, &app->dtc) != CANFDI_OK) ||
+      (canfdi_dtc_cycle_start(&app->dtc) != CANFDI_OK)) {
+    rc = -CANFDI_EINVAL;
+  }
+  return rc;
+}
+
+int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if ((app != NULL) && (cal != NULL)) {
+    app->initialised = false;
+    app->cal = *cal;
+    rc = init_modules(app, now_us);
+    if (rc == CANFDI_OK) {
+      uint32_t i;
+      canfdi_excite_enable(&app->excite_dcm, app->cal.excite_dcm_on);
+      canfdi_excite_enable(&app->excite_thr, app->cal.excite_thr_on);
+      canfdi_app_out_init(&app->out, &app->dtc);
+      canfdi_uptime_init(&app->uptime, now_us);
+      for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+        app->report[i] = CANFDI_DIAG_REPORT_NONE;
+      }
+      app->vote_out = (canfdi_vote_out_t){0};
+      app->actmon_out = (canfdi_actmon_out_t){0};
+      app->sym = (canfdi_symptoms_t){0};
+      app->dcm = (canfdi_app_gate_t){0};
+      app->thr = (canfdi_app_gate_t){0};
+      app->fb = (canfdi_app_fb_t){0};
+      app->diag = (canfdi_app_diag_t){0};
+      app->running = false;
+      app->initialised = true;
+    }
+  }
+  return rc;
+}
+
+int32_t canfdi_app_power_up(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us,
+                            const uint8_t *image, uint32_t len)
+{
+  int32_t rc = canfdi_app_init(app, cal, now_us);
+  if ((rc == CANFDI_OK) && (image != NULL) && (len > 0U)) {
+    /* the fresh memory's cycle had no report: ending it changes nothing */
+    (void)canfdi_dtc_cycle_end(&app->dtc);
+    if (canfdi_dtc_deserialize(&app->dtc, image, len) != CANFDI_OK) {
+      rc = CANFDI_APP_IMAGE_REJECTED;
+    }
+    (void)canfdi_dtc_cycle_start(&app->dtc);
+  }
+  return rc;
+}
+
+int32_t canfdi_app_power_down(canfdi_app_t *app, uint8_t *image, uint32_t cap)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if ((app != NULL) && app->initialised && (image != NULL)) {
+    (void)canfdi_dtc_cycle_end(&app->dtc);
+    rc = canfdi_dtc_serialize(&app->dtc, image, cap);
+  }
+  return rc;
+}
+
+int32_t canfdi_app_nvm_image(const canfdi_app_t *app, uint8_t *image, uint32_t cap)
+{
+  return ((app != NULL) && app->initialised) ? canfdi_dtc_serialize(&app->dtc, image, cap)
+                                             : -CANFDI_EINVAL;
+}
+
+uint32_t canfdi_app_nvm_changes(const canfdi_app_t *app) { return (app != NULL) ? app->dtc.changes : 0U; }
+
+int32_t canfdi_app_new_cycle(canfdi_app_t *app)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if ((app != NULL) && app->initialised && (canfdi_dtc_cycle_end(&app->dtc) == CANFDI_OK)) {
+    rc = canfdi_dtc_cycle_start(&app->dtc);
+  }
+  return rc;
+}
+
+int32_t canfdi_app_clear_dtc(canfdi_app_t *app, uint32_t group)
+{
+  return ((app != NULL) && app->initialised) ? canfdi_dtc_clear(&app->dtc, group) : -CANFDI_EINVAL;
+}

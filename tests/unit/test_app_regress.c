@@ -1,0 +1,273 @@
+/*
+ * test_app_regress.c — regression tests of the application (firmware/app)
+ * in closed loop with the host_sim plants, for behaviour that must hold
+ * after weeks of operation or in unusual start-ups:
+ *   - the cyclic EcuDtc frame keeps rotating over the stored trouble codes
+ *     past 2^32 steps (49.7 days): no decision rests on a diagnostic
+ *     counter, which saturates;
+ *   - an estimator whose feeding resumes restarts with a covariance reset
+ *     whatever its diagnostic step counter reads;
+ *   - a drive held off at start-up (its inputs never valid) is held off by
+ *     the actuator manager itself, so the manager's plausibility check
+ *     compares the measured armature voltage with what was applied (no
+ *     false dead-bridge code when the sensor node starts with a bad
+ *     current signal).
+ * Counters near their wrap are set directly in the application's state
+ * (the fields are public for reading; tests write them to fast-forward
+ * time). The time stamps past 71.6 minutes are tested by the SIL scenario
+ * tests/sil/scenarios/dtc_freeze_uptime.scn.
+ * Frames are packed and unpacked with the cantools codecs (host_sim's PLANT
+ * codec and the tester codec of the SIL rig), never by hand.
+ */
+#include <check.h>
+#include <string.h>
+
+#include "app/canfdi_app.h"
+#include "canfdi_sil_msg.h"
+#include "canfdi_sim_rig.h"
+#include "comm/canfdi_e2e.h"
+#include "gen/canfdi_sim_msg.h"
+#include "unit_main.h"
+
+static canfdi_app_t app;
+static canfdi_app_cal_t cal;
+static canfdi_sim_scn_t scn;
+static canfdi_sim_t sim;
+static canfdi_sim_rig_t rig;
+
+static void loop_start(const char *text)
+{
+  canfdi_sim_scn_err_t err;
+  ck_assert_int_eq(canfdi_sim_scn_parse(&scn, text, "test", &err), CANFDI_OK);
+  ck_assert_int_eq(canfdi_sim_scn_setup(&scn, &sim), CANFDI_OK);
+  ck_assert_int_eq(canfdi_sim_rig_init(&rig, &scn, &sim, (uint8_t)CANFDI_SIM_MODE_LOCKSTEP),
+                   CANFDI_OK);
+  canfdi_app_default_cal(&cal);
+  ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+}
+
+/* One lockstep step as the SIL rig runs it: the plant's and the vehicle's
+ * frames the ECU consumes, the ECU's step, its frames to the plant. The
+ * ECU's frames of the step are left in out; returns their number. */
+static int32_t loop_step(canfdi_tx_frame_t *out)
+{
+  canfdi_sim_frame_t pf[CANFDI_SIM_RIG_MAX_TX];
+  const uint32_t now_us = (uint32_t)canfdi_sim_time_us(&sim);
+  const size_t npf = canfdi_sim_rig_begin(&rig, pf);
+  size_t j;
+  int32_t n;
+  for (j = 0U; j < npf; j++) {
+    const uint32_t id = pf[j].id;
+    if ((id == CANFDI_SIL_MSG_DCM_SENSOR_FRAME_ID) || (id == CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID) ||
+        (id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) || (id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID)) {
+      (void)canfdi_app_rx_frame(&app, id, pf[j].data, pf[j].dlc, now_us);
+    }
+  }
+  n = canfdi_app_step(&app, now_us, out);
+  ck_assert_int_ge(n, 2);
+  for (j = 0U; j < (size_t)n; j++) {
+    canfdi_sim_frame_t rf;
+    rf.id = out[j].id;
+    rf.dlc = out[j].dlc;
+    memcpy(rf.data, out[j].data, sizeof rf.data);
+    (void)canfdi_sim_rig_rx(&rig, &rf, NULL);
+  }
+  canfdi_sim_rig_end(&rig);
+  return n;
+}
+
+static void loop_run(uint32_t steps)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t k;
+  for (k = 0U; k < steps; k++) {
+    (void)loop_step(out);
+  }
+}
+
+static const char *const two_faults_scn =
+    "duration 100\n"
+    "seed 5\n"
+    "noise dcm_ua 0.05\nnoise dcm_ia 0.02\nnoise dcm_speed 0.2\n"
+    "noise thr_tps1 0.003\nnoise thr_tps2 0.003\nnoise thr_i 0.01\n"
+    "init dcm_winding 52.3\n"
+    "load const 1.2\nspeed const 100\nangle const 20\n"
+    "fault 1 thr_tps1_open abrupt 1\n"
+    "fault 1.5 dcm_ia_sensor_offset abrupt 0.5\n";
+
+/* The cyclic EcuDtc frames of `steps` steps: how many distinct codes. */
+static unsigned cyclic_codes_seen(uint32_t steps)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t seen[8];
+  unsigned n_seen = 0U;
+  uint32_t k;
+  for (k = 0U; k < steps; k++) {
+    const int32_t n = loop_step(out);
+    int32_t i;
+    for (i = 0; i < n; i++) {
+      struct canfdi_sil_msg_ecu_dtc_t m;
+      unsigned s;
+      bool known = false;
+      if ((out[i].id != CANFDI_SIL_MSG_ECU_DTC_FRAME_ID) ||
+          (canfdi_sil_msg_ecu_dtc_unpack(&m, out[i].data, out[i].dlc) != 0) ||
+          (m.dtc_tx_reason != 0U) || (m.dtc_code == 0U)) {
+        continue;
+      }
+      for (s = 0U; s < n_seen; s++) {
+        known = known || (seen[s] == m.dtc_code);
+      }
+      if (!known && (n_seen < 8U)) {
+        seen[n_seen++] = m.dtc_code;
+      }
+    }
+  }
+  return n_seen;
+}
+
+/* Two stored codes (P0122, P1A20): the cyclic frame shows both
+ * within 400 ms, also once the step counter is saturated and whatever the
+ * rotation's own position reads. */
+START_TEST(test_dtc_round_robin_past_2_32_steps)
+{
+  loop_start(two_faults_scn);
+  loop_run(3000U);
+  ck_assert_uint_ge(canfdi_dtc_count_by_mask(canfdi_app_dtc(&app), (uint8_t)CANFDI_DTC_ST_TFSLC), 2U);
+  ck_assert_uint_ge(cyclic_codes_seen(400U), 2U);
+  /* 49.7 days later: the step counter saturates within the next 500 steps */
+  app.diag.steps = UINT32_MAX - 500U;
+  loop_run(600U);
+  ck_assert_uint_eq(canfdi_app_diag(&app)->steps, UINT32_MAX);
+  ck_assert_uint_ge(cyclic_codes_seen(400U), 2U);
+  /* 13.6 years of cyclic frames: the rotation's own position wraps */
+  app.out.rr_frames = UINT32_MAX - 1U;
+  ck_assert_uint_ge(cyclic_codes_seen(400U), 2U);
+  ck_assert_uint_lt(app.out.rr_frames, 10U);
+}
+END_TEST
+
+static const char *const fault_free_scn =
+    "duration 100\n"
+    "seed 9\n"
+    "noise dcm_ua 0.05\nnoise dcm_ia 0.02\nnoise dcm_speed 0.2\n"
+    "noise thr_tps1 0.003\nnoise thr_tps2 0.003\nnoise thr_i 0.01\n"
+    "init dcm_winding 52.3\n"
+    "load const 1.2\nspeed const 100\nangle const 20\n";
+
+/* The DC-motor estimator is fed while its inputs are valid; when its
+ * frames stop for a while and come back, it restarts with a covariance
+ * reset (its estimate re-converges on the new data). That must not depend
+ * on its diagnostic step counter: during the gap the counter is set to 0,
+ * what a wrapping 32-bit counter reads after 2^32 fed steps. */
+START_TEST(test_estimator_restart_independent_of_counters)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t resets_before;
+  uint32_t k;
+  bool resumed = false;
+  loop_start(fault_free_scn);
+  loop_run(2000U);
+  resets_before = canfdi_est_dcm_diag(&app.est_dcm)->resets;
+  /* 20 steps without DcmSensor */
+  for (k = 0U; k < 20U; k++) {
+    canfdi_sim_frame_t pf[CANFDI_SIM_RIG_MAX_TX];
+    const uint32_t now_us = (uint32_t)canfdi_sim_time_us(&sim);
+    const size_t npf = canfdi_sim_rig_begin(&rig, pf);
+    size_t j;
+    int32_t n;
+    for (j = 0U; j < npf; j++) {
+      if ((pf[j].id == CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID) ||
+          (pf[j].id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) ||
+          (pf[j].id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID)) {
+        (void)canfdi_app_rx_frame(&app, pf[j].id, pf[j].data, pf[j].dlc, now_us);
+      }
+    }
+    n = canfdi_app_step(&app, now_us, out);
+    for (j = 0U; j < (size_t)n; j++) {
+      canfdi_sim_frame_t rf;
+      rf.id = out[j].id;
+      rf.dlc = out[j].dlc;
+      memcpy(rf.data, out[j].data, sizeof rf.data);
+      (void)canfdi_sim_rig_rx(&rig, &rf, NULL);
+    }
+    canfdi_sim_rig_end(&rig);
+  }
+  ck_assert(!app.dcm.est_on);
+  app.est_dcm.diag.steps = 0U;
+  /* frames again: the DcmSensor E2E counter jumped, the input recovers
+   * after its recovery frames; the step in which feeding resumes resets
+   * the estimator */
+  for (k = 0U; (k < 200U) && !resumed; k++) {
+    const bool was_on = app.dcm.est_on;
+    const uint32_t r0 = canfdi_est_dcm_diag(&app.est_dcm)->resets;
+    (void)loop_step(out);
+    if (!was_on && app.dcm.est_on) {
+      resumed = true;
+      ck_assert_uint_eq(canfdi_est_dcm_diag(&app.est_dcm)->resets, r0 + 1U);
+    }
+  }
+  ck_assert(resumed);
+  ck_assert_uint_gt(canfdi_est_dcm_diag(&app.est_dcm)->resets, resets_before);
+}
+END_TEST
+
+/* The sensor node starts with an implausible armature current (out of the
+ * DBC range: the signal is rejected, its frame's other signals taken). The
+ * DC motor's inputs are then never all valid and its drive stays off; the
+ * speed controller, seeing a valid speed and supply, already asks for a
+ * large voltage. The manager must know the drive is held off: its
+ * plausibility check must not read the 0 V at the terminals as a dead
+ * bridge. */
+START_TEST(test_startup_hold_off_is_what_the_manager_applied)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  canfdi_e2e_tx_t e2e;
+  uint32_t k;
+  canfdi_app_default_cal(&cal);
+  ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+  canfdi_e2e_tx_init(&e2e, (uint16_t)CANFDI_SIM_MSG_DCM_SENSOR_FRAME_ID);
+  for (k = 1U; k <= 30U; k++) {
+    struct canfdi_sim_msg_dcm_sensor_t m;
+    struct canfdi_sim_msg_setpoint_dcm_t sp;
+    uint8_t d[8];
+    memset(&m, 0, sizeof m);
+    m.dcm_ua = canfdi_sim_msg_dcm_sensor_dcm_ua_encode(0.0);
+    m.dcm_ia = 0xFFFFU; /* beyond the DBC range: implausible */
+    m.dcm_omega = canfdi_sim_msg_dcm_sensor_dcm_omega_encode(0.0);
+    m.dcm_usupply = canfdi_sim_msg_dcm_sensor_dcm_usupply_encode(48.0);
+    ck_assert_int_eq(canfdi_sim_msg_dcm_sensor_pack(d, &m, 8U), 8);
+    ck_assert_int_eq(canfdi_e2e_protect(&e2e, d, 8U), CANFDI_OK);
+    (void)canfdi_app_rx_frame(&app, CANFDI_SIM_MSG_DCM_SENSOR_FRAME_ID, d, 8U, k * 1000U);
+    if ((k % 10U) == 1U) {
+      sp.sp_dcm_speed = canfdi_sim_msg_setpoint_dcm_sp_dcm_speed_encode(100.0);
+      sp.sp_dcm_load = canfdi_sim_msg_setpoint_dcm_sp_dcm_load_encode(1.2);
+      ck_assert_int_eq(canfdi_sim_msg_setpoint_dcm_pack(d, &sp, 8U), 8);
+      (void)canfdi_app_rx_frame(&app, CANFDI_SIM_MSG_SETPOINT_DCM_FRAME_ID, d, 8U, k * 1000U);
+    }
+    ck_assert_int_ge(canfdi_app_step(&app, k * 1000U, out), 2);
+  }
+  /* held off: never enabled, and no bridge judged dead */
+  ck_assert(!app.fb.mgr.dcm.enable);
+  ck_assert_uint_eq(app.fb.mgr.detected &
+                        (CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGE_A_DEAD) |
+                         CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGES_DEAD)),
+                    0U);
+  ck_assert_uint_eq(canfdi_actmgr_diag(&app.actmgr).ua_implausible, 0U);
+}
+END_TEST
+
+static Suite *make_suite(void)
+{
+  Suite *s = suite_create("app_regress");
+  TCase *tc = tcase_create("long_operation");
+  tcase_set_timeout(tc, 120);
+  tcase_add_test(tc, test_dtc_round_robin_past_2_32_steps);
+  tcase_add_test(tc, test_estimator_restart_independent_of_counters);
+  suite_add_tcase(s, tc);
+  tc = tcase_create("startup");
+  tcase_add_test(tc, test_startup_hold_off_is_what_the_manager_applied);
+  suite_add_tcase(s, tc);
+  return s;
+}
+
+CANFDI_UNIT_MAIN(make_suite)
