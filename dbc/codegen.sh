@@ -3,6 +3,7 @@
 #   dbc/canfdi.dbc                           VAL_ tables of *FaultId and DtcCode
 #   host_sim/gen/canfdi_faults.{h,c}         fault/DTC tables for the simulator
 #   firmware/catalogue/canfdi_catalogue.{h,c} fault/DTC ids for the firmware
+#   firmware/diag/gen/canfdi_diag_rules.{h,c} diagnosis rules (dbc/diag_rules.csv)
 #   firmware/comm/gen/canfdi_raw_limits.h    plausible raw range of each signal
 #   firmware/comm/gen/canfdi_sig_conv.h      raw <-> Q16.16 conversion constants
 #   firmware/comm/gen/canfdi_msg.{h,c}       cantools codec, node ECU, integers only
@@ -20,6 +21,7 @@ FILES=(
   dbc/canfdi.dbc
   host_sim/gen/canfdi_faults.h host_sim/gen/canfdi_faults.c
   firmware/catalogue/canfdi_catalogue.h firmware/catalogue/canfdi_catalogue.c
+  firmware/diag/gen/canfdi_diag_rules.h firmware/diag/gen/canfdi_diag_rules.c
   firmware/comm/gen/canfdi_raw_limits.h
   firmware/comm/gen/canfdi_sig_conv.h
   firmware/comm/gen/canfdi_msg.h firmware/comm/gen/canfdi_msg.c

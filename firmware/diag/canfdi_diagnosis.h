@@ -5,15 +5,21 @@
  * with a confidence, and report a verdict per catalogue fault id for the
  * trouble-code memory.
  *
- * Two kinds of knowledge, one ROM table each (canfdi_diagnosis.c):
+ * The knowledge is one data file, dbc/diag_rules.csv (one rule per row,
+ * with a note on why), from which diag/gen/canfdi_diag_rules.c is
+ * generated (`make dbc-gen`); two kinds of rules:
  *  - Hard rules on the signal-based flags (range checks, 2-out-of-3 vote,
- *    actuator manager): a fault is FAILED when its required flags are all
- *    present (persistently) and none of its forbidden flags is. Confidence
- *    100 %. These monitors have their own physics and debouncing; a fired
- *    hard rule also masks the model-based rules of its component, because
- *    the fault it names breaks the models' assumptions (a dead bridge makes
- *    U_A = 0, an open TPS invalidates CORR and POSk, an open motor collapses
- *    every throttle estimate).
+ *    actuator monitors and manager): a fault is FAILED when its required
+ *    flags are all present (persistently) and none of its forbidden flags
+ *    is; confidence 100 %. A rule cannot run while any of its `untested`
+ *    raw flags is set this step (its input is INVALID: never received or
+ *    lost): it then reports nothing, so the trouble code's
+ *    testNotCompletedThisOperationCycle stays set (ISO 14229-1) instead of
+ *    a pass judged from a stale range result. These monitors have their own
+ *    physics and debouncing; a fired hard rule also masks the model-based
+ *    rules of its component, because the fault it names breaks the models'
+ *    assumptions (a dead bridge makes U_A = 0, an open TPS invalidates CORR
+ *    and POSk, an open motor collapses every throttle estimate).
  *  - Model rules: per fault a pattern of expected symptom signs over the
  *    component's symptom channels (below), each entry one of
  *        '+' '-' '0' : supporting: counts in the confidence,
@@ -22,6 +28,14 @@
  *    A bipolar rule (sensor offsets) matches the pattern or its negation
  *    (a sensor offset may have either sign); the polarity is chosen per
  *    evaluation, the one with the higher confidence.
+ * The patterns are the parity structure of model/canfdi_parity_{dcm,thr}.h
+ * checked against the measured fault-symptom table (bench/bench_symptoms.c,
+ * build/bench/symptoms.json): tests/dbc/test_diagnosis_rules.py reads the
+ * data file and the firmware's thresholds and fails when a rule disagrees
+ * with the measured symptoms or another rule would fit them too. '.' marks
+ * a symptom that is intermittent (e.g. r3 for R_A up: out of band 95 % of
+ * the time with zero mean, the J dR/Psi dI/dt term of the transients) or
+ * depends on the operating point.
  *
  * Symptom channels (per component, 10 slots; normalised so that 1.0 is the
  * threshold):
@@ -30,100 +44,32 @@
  *                                                 threshold, + and - sides
  *                                                 separately)
  *              8 J/Psi: dev(J) - dev(Psi)        (derived; / cfg threshold)
- *              9 UAC: measured U_A - command     (symptom field added for
- *                                                 this module)
+ *              9 UAC: measured U_A - command     (detect/canfdi_actmon.h)
  *   throttle   0 CORR 1 ARM 2 POS1 3 POS2        (residual / band)
- *              4 R 5 K 6 spring 7 friction       (relative deviation)
+ *              4 R 5 K 6 spring 7 friction       (relative deviation; spring
+ *                                                 and friction from the
+ *                                                 estimator's fast test)
  *              8, 9 unused
  * Why the two derived DC-motor channels. In the armature equation a U_A
  * offset dU and an omega offset -dU/Psi are the same term, and R_A up gives
- * the same r1/r4 signs in steady state (parity header): the parameter
- * estimates separate R_A (R_A moves, Psi does not) from the sensor offsets
- * (Psi moves by dU/(Psi w), R_A does not), and UAC separates U_A from
- * omega (only a U_A sensor fault makes the measurement disagree with the
- * command). A speed-sensor GAIN scales dw/dt, which the mechanical
- * estimator sees through J/Psi (bench: J -9.3 %, Psi -4.8 % at +5 %), while
- * a speed OFFSET leaves dw/dt and J/Psi alone (J and Psi both -10.9 %): the
- * J/Psi channel separates the two.
- * What this achieves (tests/unit/test_diagnosis.c, tests/dbc/
- * test_diagnosis_rules.py): every one of these faults is isolated from the
- * measured pattern once the estimators have moved; before that (r1/r4
- * only) it is "detected, not isolated". Without a valid UAC channel a U_A
- * offset and an omega offset stay "detected, not isolated": physics, not a
- * tuning choice.
- *
- * The rule table (CANFDI_FAULT_* of the catalogue; pol b = bipolar):
- *   DC motor           pol  r1 r2 r3 r4 | RA Psi J Mc | J/Psi UAC
- *   1 dcm_ra_up         u   +  Z  .  +  | P  Z   .  .  | .     0
- *   2 dcm_flux_down     u   N  +  +  -  | 0  N   .  .  | P     0
- *   3 dcm_friction_up   u   Z  P  P  +  | 0  0   .  +  | .     0
- *   4 dcm_ia_offset     b   N  P  P  Z  | .  .   .  .  | 0     0
- *   5 dcm_speed_gain    b   N  .  Z  -  | 0  -   .  .  | N     0
- *   6 dcm_speed_offset  b   -  Z  Z  -  | 0  N   .  .  | Z     Z
- *   7 dcm_ua_offset     b   +  Z  0  +  | 0  +   .  .  | 0     P
- *   throttle           pol  CORR ARM POS1 POS2 | R  K  spring friction
- *   14 thr_tps1_drift   b   P    Z   P    Z    | .  .  .      .
- *   15 thr_tps2_drift   b   P    Z   Z    N    | .  .  .      .
- *   16 thr_spring_weak  u   Z    Z   .    .    | 0  Z  N      Z
- *   17 thr_friction_up  u   Z    Z   .    .    | 0  Z  .      P
- *   18 thr_motor_r_up   u   Z    +   .    .    | P  0  .      .
- *   19 thr_motor_open   u   0    P   -    -    | N  N  .      .
- *   20 thr_jammed       b   Z    Z   P    P    | 0  0  .      .
- *   hard rules (flags, CANFDI_SYM_F_*)    required          forbidden
- *   8  dcm_bridge_a_dead                  BRIDGE_A_DEAD     BRIDGE_B_DEAD
- *   9  dcm_bridges_dead                   BRIDGE_B_DEAD     -
- *      (the manager only checks the active bridge: B is found dead only
- *       after A failed, so B dead means both)
- *   10 thr_tps1_open                      TPS1_LOW          TPS2_LOW
- *   11 thr_tps1_short                     TPS1_HIGH         -
- *   12 thr_tps2_open                      TPS2_LOW          TPS1_LOW
- *   13 thr_tps2_short                     TPS2_HIGH         -
- *   21 thr_tps_both_lost                  TPS1_LOW+TPS2_LOW -
- *   14 thr_tps1_drift                     TPS1_OUTLIER      TPS2_OUTLIER
- *   15 thr_tps2_drift                     TPS2_OUTLIER      TPS1_OUTLIER
- *   19 thr_motor_open                     THR_NO_CURRENT    -
- *   20 thr_jammed                         THR_NOT_FOLLOWING THR_NO_CURRENT
- * Three entries follow the application rather than the open-loop bench:
- * flux down needs r1, Psi and J/Psi (J/Psi + is its alone) and only
- * supports r2..r4, because the application's load tracking (parity_dcm
- * load_tau 1 s) pulls a persistent torque mismatch out of r2..r4 within a
- * few seconds, after which the old pattern (r2, r3 necessary) no longer
- * matched and the runner-up (speed gain, or I_A offset while r4 was back
- * in band) was confirmed 2.3-3 s after the true P1A11; the speed-gain rule
- * supports Psi '-' (bench: -4.8 % at +5 %), which flux down contradicts.
- * U_A offset: r3 is 0 in steady state but swings for ~0.1 s after a step
- * (the offset enters r3 through the derivative terms), so it supports
- * instead of being necessary; the UAC channel (necessary) is what tells it
- * from the omega offset. SIL: P1A22 45-60 ms instead of 145 ms.
- * Speed gain: r1 necessary, not only J/Psi. J/Psi is a derived channel of
- * the mechanical estimator, and that estimator alone can move J: in the
- * detection bench (fault_free_load_09, 10 h fault-free) the speed PRBS
- * stepped into the 48 V clamp at 115 rad/s and 1.43 N m, the estimate read
- * J -2.2 % with Psi -0.05 % and every residual in band, J/Psi -1.07 x its
- * threshold for 25 ms, and with J/Psi the rule's only necessary entry the
- * speed gain was the sole candidate (66 %): P1A21 confirmed. A real gain g
- * also unbalances the armature equation (no load term, no load tracking):
- * r1 = -Psi g w, 0.0065 w V when J/Psi (-g/(1+g)) reaches its 2 %
- * threshold, i.e. >= 2.7 x the 0.12 V steady r1 band from 50 rad/s on and
- * 5 x at 100 rad/s, and an abrupt change of that size freezes the R_A
- * tracker (parity_dcm ra_gate). Limit: a gain drifting slower than the
- * tracker (ra_tau 60 s) can be absorbed into R_A; it then stays
- * "detected, not isolated" instead of P1A21. SIL: P1A21 for gain/offset
- * 46-49 ms instead of 39-44 ms (the offset's fast report comes through
- * this rule, J/Psi before Psi), incipient cases unchanged.
- * The throttle's spring and friction channels are the fast structured
- * test of canfdi_est_thr (nominal mechanical residual correlated with the
- * spring torque and the friction sign over ~0.3 s of motion in both
- * directions; nominal K). The rules keep K at zero as necessary: the
- * electrical estimate of K dips by 10 % for ~0.6 s after a motor R +10 %
- * step, and the armature current then no longer measures the torque the
- * nominal model assumes.
- * The patterns are the parity structure of model/canfdi_parity_{dcm,thr}.h
- * checked against the measured table (bench/bench_symptoms.c,
- * build/bench/symptoms.json; tests/dbc/test_diagnosis_rules.py compares
- * them): '.' where the measured symptom is intermittent (e.g. r3 for R_A up
- * is out of band 95 % of the time with zero mean: the J dR/Psi dI/dt term
- * of the transients) or depends on the operating point.
+ * the same r1/r4 signs in steady state: the parameter estimates separate
+ * R_A (R_A moves, Psi does not) from the sensor offsets (Psi moves by
+ * dU/(Psi w), R_A does not), and UAC separates U_A from omega (only a U_A
+ * sensor fault makes the measurement disagree with the command). A
+ * speed-sensor GAIN scales dw/dt, which the mechanical estimator sees
+ * through J/Psi (J -9.3 %, Psi -4.8 % at +5 %), while a speed OFFSET leaves
+ * dw/dt and J/Psi alone (J and Psi both -10.9 %). J/Psi alone is not enough
+ * for a gain: the mechanical estimator can move J by itself (a PRBS step
+ * into the 48 V clamp read J -2.2 % with every residual in band), and a
+ * real gain g also unbalances the armature equation (r1 = -Psi g w, at
+ * least 2.7 x the r1 band from 50 rad/s on), so its rule needs r1. Limit: a
+ * gain drifting slower than the parity equations' R_A tracker (ra_tau 60 s)
+ * can be absorbed into R_A and then stays "detected, not isolated". Without
+ * a valid UAC channel a U_A offset and an omega offset stay "detected, not
+ * isolated": physics, not a tuning choice. The throttle's spring and
+ * friction rules keep K at zero as necessary: the electrical estimate of K
+ * dips by 10 % for ~0.6 s after a motor R +10 % step, and the armature
+ * current then no longer measures the torque the nominal model assumes.
  *
  * Symptom persistence (per channel and per flag). Ternary from the
  * normalised value x: |x| >= on -> sign(x); |x| < off -> 0; in between the
@@ -136,16 +82,12 @@
  * some ms apart (flux down: r4 ~25 ms after r1..r3), and in between the
  * pattern would read as another fault's (I_A offset, r4 = 0). Likewise a
  * channel at 0 confirms a zero only after its value stayed below `off`
- * for sym_off_steps (the persistence that takes a symptom back to 0; a
- * channel that becomes valid starts settled, as its state starts at 0): a
- * value in the hysteresis band [off, on) is neither a symptom nor its
- * absence. Why: a slow I_A offset ramp moves r1 (-R dI) and r2/r3
- * (Psi dI) together, but r2/r3 cross their bands first; with r1 hovering
- * at -0.8..-0.93 for ~0.1 s the pattern r1 0, r2 +, r3 + was friction up
- * (r1 Z) and P1A12 was confirmed 45 ms before the true P1A20 (SIL matrix
- * dcm_ia_sensor_offset_incipient, seed 2). The friction hypothesis needs
- * r1 clearly zero (the armature equation is untouched by friction), and
- * an r1 that large is not.
+ * for sym_off_steps (a channel that becomes valid starts settled, as its
+ * state starts at 0): a value in the hysteresis band [off, on) is neither
+ * a symptom nor its absence. A slow I_A offset ramp moves r1 (-R dI) and
+ * r2/r3 (Psi dI) together with r2/r3 crossing first, while r1 hovers at
+ * -0.8..-0.93: read as a zero, that r1 would make the pattern friction up
+ * (r1 Z), whose hypothesis needs r1 clearly zero.
  *
  * Matching (each step, per component without a fired hard rule):
  *  - detected = some channel persistently +/-.
@@ -171,35 +113,8 @@
  *  - Hard-rule faults are PASSED while their condition is false (the flag
  *    producers latch their failures: vote isolation, manager bridge state).
  * Communication faults (ids 22..31) stay NONE (canfdi_rx reports them).
- *
- * Checked on the bench rig's per-step symptom vectors (bench/
- * bench_model_common.h: closed-loop host_sim plants, the four model
- * modules, no vote/manager flags; spring channel = pretension (the RLS,
- * before the fast test; figures below are of that version); UAC band
- * 0.3 V; 3 noise seeds, abrupt faults at 25 s, 10 s observed): every fault
- * of the catalogue at its magnitude isolated correctly, none wrongly except
- * thr_motor_open read as thr_motor_r_up for 0.2 s in one seed (the
- * THR_NO_CURRENT hard rule masks that in the application); first FAILED
- * after: TPS range 8 ms, TPS drift 38-94 ms, I_A offset 50-57 ms, U_A
- * offset 115-130 ms, omega offset 132-178 ms, omega gain 139-269 ms, flux
- * 136-258 ms, R_A +20 % 313-358 ms (+10 % 0.8-1.0 s), DC friction +50 %
- * 110-241 ms, throttle motor R +50 % 58-314 ms (+10 % 0.8-1.1 s), jam
- * 53-131 ms, spring -30 % 1.3-1.6 s (-20 % 3.2-3.4 s), throttle friction
- * x2 0.7-0.9 s (+20 % 4.9-7.3 s). Not isolated: DC friction +20 % (FAILED
- * in only 5 % of the steps: r4 mostly in band), spring -10 %. No false
- * report before the faults.
- * With the fast structured test (SIL, tests/sil, seeds file/2/3): spring
- * -30 % P1B10 after 146-748 ms, -20 % 320-748 ms, -10 % 748-782 ms;
- * friction x2 P0638 after 72-80 ms, +20 % 494-748 ms; +10 % only after
- * 2.7-7.5 s (the estimate's closed-loop bias of about -7 % eats most of
- * it: samples whose friction sign is taken near the velocity band are
- * selected by the velocity noise, to which the position loop's derivative
- * action answers with an opposite current; gating the test at 3 x the band
- * removes the bias (-2 %, sd 0.7 %) but with the +-3 deg excitation leaves
- * a quarter of the samples and slows every detection to 2-6 s). The 748 ms cases wait for the valve to move both ways again: the
- * vehicle's +-8 deg 0.5 Hz sine on top of the +-3 deg 2 Hz excitation
- * leaves ~0.5 s phases of one-way motion, in which the two regressors are
- * not separable and the test holds its last (pre-fault) verdict invalid.
+ * Detection delays per fault, measured in closed loop: tests/sil/README.md
+ * and `make bench-detection` (build/bench/detection.json).
  *
  * Latency budget (defaults): a symptom needs 20 steps, the decision 20
  * more, overlapping by one: FAILED in the 39th step (sym_on + isolate - 1)
@@ -248,6 +163,7 @@
 #include "core/canfdi_common.h"
 #include "catalogue/canfdi_catalogue.h"
 #include "diag/canfdi_symptoms.h"
+#include "diag/gen/canfdi_diag_rules.h"
 
 #define CANFDI_DIAG_REPORT_FAILED ((int8_t)1)
 #define CANFDI_DIAG_REPORT_PASSED ((int8_t)-1)
@@ -333,7 +249,6 @@ typedef struct {
   uint16_t zero; /* expected 0 */
 } canfdi_diagnosis_rule_t;
 
-#define CANFDI_DIAG_N_RULES 14U /* model rules in the ROM table */
 
 typedef struct {
   int8_t state; /* CANFDI_DIAG_SYM_* */
@@ -374,19 +289,6 @@ typedef struct {
  * gain gives -4.7 %). Throttle R +8 % / -20 %, K 10 % / 10 %, spring
  * +20 % / -10 %, friction +8 % / -30 % (fast structured test; the
  * argument is at the values in canfdi_diagnosis.c). NULL ignored.
- * History (the RLS channels used before the fast test): the spring
- * channel should carry the PRETENSION estimate
- * (canfdi_est_thr_pretension_q16 against pretension_nom_q16), not the
- * spring constant k_s: the two are correlated regressors of the mechanical
- * estimator, and k_s swings by up to -73 % at the 0.5 Hz stroke frequency
- * within 200 ms of a friction change and wanders by 4 % (up to 9 %) when
- * nothing is wrong, while the pretension stays within 15 % and 1 %.
- * Measured on the bench rig's per-step symptom vectors (3 noise seeds,
- * fault at 25 s): with k_s (threshold -15 %) 2 of 3 fault-free runs raised
- * thr_spring_weak (701 and 2010 steps) and thr_friction_up x2 isolated
- * thr_spring_weak for 520-720 ms first; with the pretension (-10 %) no
- * false or wrong report at all, spring -30 % isolated after 1.3-1.6 s,
- * -20 % after 3.2-3.4 s, -10 % not seen (pretension -8.4 %).
  */
 void canfdi_diagnosis_default_cfg(canfdi_diagnosis_cfg_t *cfg);
 

@@ -1,4 +1,5 @@
-"""The rule table of firmware/diag/canfdi_diagnosis.c against the measured
+"""The diagnosis' rule table (dbc/diag_rules.csv, from which
+firmware/diag/gen/canfdi_diag_rules.c is generated) against the measured
 fault-symptom table build/bench/symptoms.json (`make bench-symptoms`).
 
 For every catalogue fault that has a model rule, at its catalogue magnitude:
@@ -11,7 +12,8 @@ Measured ternary symptom per channel, with the firmware's thresholds:
     threshold) >= 50 % of the time and the mean moved >= 3 sigma; '0' when it
     is out of band <= 10 % of the time; otherwise '~' (intermittent);
   parameters: the relative deviation (after - before) / before against the
-    default thresholds parsed from canfdi_diagnosis_default_cfg (+ and - side);
+    firmware's default thresholds (canfdi_diagnosis_default_cfg, printed by
+    tests/dbc/diag_cfg_dump.c compiled with the firmware; + and - side);
   J/Psi: rel(J) - rel(Psi) against the J/Psi threshold;
   UAC: U_A measured vs command, >= 3 sigma (its band is the application's).
 Skipped when the bench table has not been produced. Smaller magnitudes of the
@@ -19,16 +21,18 @@ parametric faults are printed, not asserted (they are where isolation ends).
 """
 from __future__ import annotations
 
+import csv
 import json
 import os
-import re
+import subprocess
+from functools import lru_cache
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-SRC = ROOT / "firmware" / "diag" / "canfdi_diagnosis.c"
-CAT = ROOT / "firmware" / "catalogue" / "canfdi_catalogue.h"
+RULES_CSV = ROOT / "dbc" / "diag_rules.csv"
+FAULTS_CSV = ROOT / "dbc" / "faults.csv"
 TABLE = Path(os.environ.get("CANFDI_SYMPTOMS_JSON", ROOT / "build" / "bench" / "symptoms.json"))
 
 DCM_CH = ["r1", "r2", "r3", "r4", "est_dcm.R_A", "est_dcm.Psi", "est_dcm.J", "est_dcm.M_c",
@@ -43,29 +47,42 @@ PAR_NAME = {"est_dcm.R_A": ("dcm", "RA"), "est_dcm.Psi": ("dcm", "PSI"), "est_dc
             "est_thr.fast_P": ("thr", "SPRING"), "est_thr.fast_T_c": ("thr", "FRICTION")}
 
 
-def _fault_ids() -> dict[str, int]:
-    return {m.group(1): int(m.group(2))
-            for m in re.finditer(r"#define CANFDI_FAULT_(\w+)\s+(\d+)U", CAT.read_text())}
+def _faults() -> dict[str, dict]:
+    with FAULTS_CSV.open(newline="", encoding="utf-8") as f:
+        return {row["name"]: row for row in csv.DictReader(f)}
 
 
 def _rules() -> list[dict]:
-    ids = _fault_ids()
+    faults = _faults()
     out = []
-    for m in re.finditer(r'\{\s*CANFDI_FAULT_(\w+),\s*COMP_(DCM|THR),\s*([01])U,\s*"([^"]+)"\s*\}',
-                         SRC.read_text()):
-        pat = m.group(4).replace(" ", "")
-        out.append({"name": m.group(1), "id": ids[m.group(1)], "comp": m.group(2),
-                    "bipolar": m.group(3) == "1", "pattern": pat})
+    with RULES_CSV.open(newline="", encoding="utf-8") as f:
+        for r in csv.DictReader(f):
+            if r["kind"] != "model":
+                continue
+            fault = faults[r["fault"]]
+            out.append({"name": r["fault"].upper(), "id": int(fault["id"]),
+                        "comp": "DCM" if fault["component"] == "dc_motor" else "THR",
+                        "bipolar": r["polarity"] == "b", "pattern": r["pattern"].replace(" ", "")})
     return out
 
 
+@lru_cache(maxsize=1)
 def _thresholds() -> tuple[dict, float]:
-    txt = SRC.read_text()
+    """The firmware's default thresholds, from the compiled firmware."""
+    import tempfile
+    exe = Path(tempfile.mkdtemp(prefix="diag_cfg_")) / "dump"
+    src = [ROOT / "tests/dbc/diag_cfg_dump.c", ROOT / "firmware/diag/canfdi_diagnosis.c",
+           ROOT / "firmware/diag/gen/canfdi_diag_rules.c", ROOT / "firmware/catalogue/canfdi_catalogue.c",
+           ROOT / "firmware/core/canfdi_fixp.c"]
+    subprocess.run([os.environ.get("CC", "gcc"), "-std=c99", "-O1", "-I" + str(ROOT / "firmware"),
+                    *map(str, src), "-o", str(exe)], check=True, capture_output=True, text=True)
+    raw = json.loads(subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout)
     thr = {}
-    for m in re.finditer(r"cfg->(dcm|thr)_par_(pos|neg)_q16\[CANFDI_SYM_(?:DCM|THR)_P_(\w+)\] = (\d+);", txt):
-        thr[(m.group(1), m.group(3), m.group(2))] = int(m.group(4)) / 65536.0
-    jpsi = int(re.search(r"cfg->jpsi_q16 = (\d+);", txt).group(1)) / 65536.0
-    return thr, jpsi
+    for key, v in raw.items():
+        if key != "jpsi":
+            plant, par, side = key.split()
+            thr[(plant, par, side)] = v / 65536.0
+    return thr, raw["jpsi"] / 65536.0
 
 
 def _rel(col: dict) -> float:
