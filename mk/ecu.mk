@@ -1,6 +1,7 @@
 # mk/ecu.mk — canfdi-ecu, the supervisor as a Linux process on SocketCAN
-# (firmware/port/linux/canfdi_ecu_main.c, canfdi_socketcan.c, with the
-# host NVM port canfdi_nvm_file.c of mk/nvm.mk).
+# (firmware/port/linux/canfdi_ecu_*.c: the loop, command line, NVM and
+# statistics; canfdi_socketcan.c; the host NVM port canfdi_nvm_file.c of
+# mk/nvm.mk).
 #
 #   make $(BUILD)/bin/canfdi-ecu       UBSan build (warnings of HOST_CFLAGS,
 #                                      asserts on; part of `make all`)
@@ -25,9 +26,13 @@
 ECU_BIN := $(BUILD)/bin/canfdi-ecu
 ECU_ASAN_BIN := $(BUILD)/bin/canfdi-ecu-asan
 ECU_REL_BIN := $(BUILD)/bin/canfdi-ecu-rel
-ECU_PORT_SRC := firmware/port/linux/canfdi_ecu_main.c firmware/port/linux/canfdi_socketcan.c \
-                firmware/port/linux/canfdi_nvm_file.c
+ECU_PORT_SRC := firmware/port/linux/canfdi_ecu_main.c firmware/port/linux/canfdi_ecu_cli.c \
+                firmware/port/linux/canfdi_ecu_nvm.c firmware/port/linux/canfdi_ecu_stats.c \
+                firmware/port/linux/canfdi_socketcan.c firmware/port/linux/canfdi_nvm_file.c
 ECU_FEATURES_canfdi_ecu_main := -D_GNU_SOURCE -pthread
+ECU_FEATURES_canfdi_ecu_cli := -D_GNU_SOURCE
+ECU_FEATURES_canfdi_ecu_nvm := -D_GNU_SOURCE -pthread
+ECU_FEATURES_canfdi_ecu_stats := -D_GNU_SOURCE
 ECU_FEATURES_canfdi_socketcan := -D_DEFAULT_SOURCE
 ECU_FEATURES_canfdi_nvm_file := -D_POSIX_C_SOURCE=200809L
 
@@ -49,6 +54,9 @@ $(ECU_BIN): $(ECU_UBSAN_OBJ)
 # come from mk/nvm.mk, read after this file).
 ECU_ASAN_OBJ := $(patsubst %.c,$(BUILD)/host/%.o,$(ECU_PORT_SRC))
 $(BUILD)/host/firmware/port/linux/canfdi_ecu_main.o: HOST_CFLAGS += $(ECU_FEATURES_canfdi_ecu_main)
+$(BUILD)/host/firmware/port/linux/canfdi_ecu_cli.o: HOST_CFLAGS += $(ECU_FEATURES_canfdi_ecu_cli)
+$(BUILD)/host/firmware/port/linux/canfdi_ecu_nvm.o: HOST_CFLAGS += $(ECU_FEATURES_canfdi_ecu_nvm)
+$(BUILD)/host/firmware/port/linux/canfdi_ecu_stats.o: HOST_CFLAGS += $(ECU_FEATURES_canfdi_ecu_stats)
 $(BUILD)/host/firmware/port/linux/canfdi_socketcan.o: HOST_CFLAGS += $(ECU_FEATURES_canfdi_socketcan)
 
 $(ECU_ASAN_BIN): $(ECU_ASAN_OBJ) $(FW_HOST_OBJ)
