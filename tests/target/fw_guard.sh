@@ -19,7 +19,7 @@
 #     the image, i.e. the entry point calls it so --gc-sections did not hide it
 #     from checks 1-2. Excluded: cantools-generated *_is_in_phys_range(), which
 #     take a `double` by construction and must never be called in firmware
-#     (design brief), so they must be garbage-collected, not linked;
+#     (dbc/README.md), so they must be garbage-collected, not linked;
 #  4. every `static inline` function of a firmware header is referenced in the
 #     entry point (inline code lands in the caller, so only a call checks it);
 #  5. no `float`/`double` keyword in firmware sources outside comments and

@@ -15,7 +15,7 @@
 #
 # Skipped: functions with a floating-point parameter — the cantools
 # *_is_in_phys_range(double) checks, which must never be called in firmware
-# (design brief), so they must never be linked either. An argument type this
+# (dbc/README.md), so they must never be linked either. An argument type this
 # script cannot synthesise becomes an #error naming it.
 use strict;
 use warnings;
