@@ -12,7 +12,8 @@ PY := $(CURDIR)/$(VENV)/bin/python
 CC := gcc
 CXX := g++
 
-# Warnings for every C file we build, host or target (see style.md).
+# Warnings for every C file we build, host or target (README.md, conventions
+# for contributors; docs/requirements.md).
 WARN_C := -std=c99 -Wall -Wextra -Werror -pedantic -Wconversion \
           -Wsign-conversion -Wdouble-promotion -Wfloat-equal -Wshadow \
           -Wstrict-prototypes -Wmissing-prototypes -Wundef
@@ -36,9 +37,9 @@ BENCH_STEPS :=
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 # libcheck runs each test in a forked child by default; under ASan a fork
-# costs several ms, which made a table-driven suite take a minute. Tests
-# run in-process (a crash still fails the program, with the sanitizer's
-# report); `make unit CK_FORK=yes` isolates every test again.
+# costs several ms, about a minute for a table-driven suite. Tests run
+# in-process (a crash still fails the program, with the sanitizer's
+# report); `make unit CK_FORK=yes` isolates every test.
 CK_FORK ?= no
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/unit/%)
 

@@ -18,7 +18,7 @@ bench-foundation: $(BUILD)/bench/bench_foundation
 BENCH_STEPS += bench-foundation
 
 # ---------------------------------------------------------------------------
-# Model layer (issue 4): the measured fault-symptom table and the long
+# Model layer: the measured fault-symptom table and the long
 # fault-free run. Closed-loop host_sim plants + the four fixed-point model
 # modules, all -O2 without sanitizers (project warnings, -Werror).
 #   make bench-symptoms   $(BUILD)/bench/symptoms.json + table on stdout

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""bench_detection.py — issue 5's detection figures from the SIL runner.
+"""bench_detection.py — the detection figures of docs/requirements.md, from the SIL runner.
 
 A bench: it prints and records figures and never fails on a figure, only when
 it cannot run (no runner, a scenario the runner refuses). Standard library

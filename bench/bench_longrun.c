@@ -1,6 +1,7 @@
 /*
- * bench_longrun.c — the long fault-free run of issue 4's acceptance: both
- * host_sim plants in closed loop for (by default) 10 simulated hours with
+ * bench_longrun.c — the long fault-free run of the model layer (the
+ * false-alarm requirement of docs/requirements.md): both host_sim plants
+ * in closed loop for (by default) 10 simulated hours with
  * a varied setpoint and load schedule, all four residual modules and both
  * estimators running on the measured signals (bench_model_common.h), and
  * the DC motor's winding warming up from cold (R_A 1.35 Ohm at ambient,
@@ -67,10 +68,10 @@
  * stand-in controller (no current limit) to the +-30 A end of the current
  * sensor's span at the lower speed levels, i.e. outside the measurement
  * envelope, and its continuous I^2 R would heat the winding far beyond the
- * brief's 1.35 -> ~1.5 Ohm. */
+ * warm-up of the literature, 1.35 -> ~1.5 Ohm (docs/design.md). */
 #define PRBS_AMPL 20.0
 /* Load range: its mean (0.9 N m, ~3 A) with the dynamic segments' extra
- * current gives the brief's warm-up, R_A 1.35 -> ~1.5 Ohm; the nominal
+ * current gives the literature's warm-up, R_A 1.35 -> ~1.5 Ohm; the nominal
  * 1.2 N m everywhere plus the dynamics heats the winding to ~1.6 Ohm. */
 #define LOAD_MIN_NM 0.4
 #define LOAD_MAX_NM 1.4

@@ -1,5 +1,5 @@
 /*
- * bench_symptoms.c — the measured fault-symptom table (issue 4, item 6): a
+ * bench_symptoms.c — the measured fault-symptom table: a
  * reproduction of the kind of table Isermann publishes (Fault-Diagnosis
  * Systems, 2006: residual and parameter deviations per fault, in units of
  * their fault-free noise, with the sign).
@@ -240,9 +240,10 @@ static unsigned fault_plant(uint8_t id)
 }
 
 /*
- * Which faults the design brief expects the model-based methods (parity
- * equations, parameter estimation) to see, and why the others are not
- * theirs. NULL: expected to be observable.
+ * Which faults the model-based methods (parity equations, parameter
+ * estimation) are expected to see (docs/design.md, "Which methods see which
+ * faults"), and why the others are not theirs. NULL: expected to be
+ * observable.
  */
 static const char *not_observable_why(uint8_t id)
 {
@@ -269,7 +270,7 @@ static const char *not_observable_why(uint8_t id)
   case CANFDI_FAULT_THR_JAMMED:
     why = "with the valve stuck the motor sees a locked rotor: u = R i + L di/dt holds with "
           "dtheta/dt = 0, so ARM stays consistent, and the estimators lose their excitation (no "
-          "motion) and hold their values; the symptom the brief names is the position not following "
+          "motion) and hold their values; the symptom that names it is the position not following "
           "the setpoint (thr_tracking_error). The position residuals may move in common mode (the "
           "observer, driven by the motor current, predicts motion the stuck valve does not make): "
           "see the note";
@@ -727,7 +728,7 @@ static int write_json(const char *path, int n_seeds, int n_ff, double wall, cons
       bm_json_str(f, seen_by(cs->id));
       if (cs->observable) {
         bool first_n = true;
-        fprintf(f, ", \"note\": \"not expected by the design brief, but these model-based channels moved by >= 3 "
+        fprintf(f, ", \"note\": \"not expected (docs/design.md), but these model-based channels moved by >= 3 "
                    "sigma in this rig:");
         for (c = 0U; c < BM_N_CH; c++) {
           if (((cs->sym[c] == '+') || (cs->sym[c] == '-')) &&
@@ -816,7 +817,7 @@ static int write_json(const char *path, int n_seeds, int n_ff, double wall, cons
     }
     fprintf(f, "     }}%s\n", (i + 1U < n_cases) ? "," : "");
   }
-  fprintf(f, "  ],\n  \"acceptance\": {\n    \"criterion\": \"every catalogue fault that the design brief expects "
+  fprintf(f, "  ],\n  \"acceptance\": {\n    \"criterion\": \"every catalogue fault that docs/design.md expects "
              "model-based methods to see shows a deviation of at least 3 sigma in at least one residual or "
              "parameter (at its catalogue magnitude); faults that are not observable say so and why\",\n");
   fprintf(f, "    \"met\": [");
@@ -904,7 +905,7 @@ int main(int argc, char **argv)
   fprintf(stderr, "\n");
   wall = bm_wall_s() - t0;
 
-  printf("Measured fault-symptom table (issue 4 item 6): mean deviation after the fault / fault-free sigma "
+  printf("Measured fault-symptom table: mean deviation after the fault / fault-free sigma "
          "(%d seeds; sigma from %d fault-free runs).\n"
          "Symptom when |dev| >= %.0f sigma (shown with its value), else 0; x = channel not valid after the fault; "
          "range checks (after |): +/- = the fraction of samples above/below the plausible range grew by >= %.1f. "
@@ -949,7 +950,7 @@ int main(int argc, char **argv)
     }
     printf("  %u agree, %u weaker, %u differ\n\n", n_v[0], n_v[1], n_v[2]);
   }
-  printf("Acceptance (catalogue magnitude): a fault the design brief expects model-based methods to see must show "
+  printf("Acceptance (catalogue magnitude): a fault docs/design.md expects model-based methods to see must show "
          ">= 3 sigma in a residual or parameter.\n");
   for (i = 0U; i < n_cases; i++) {
     const case_t *cs = &cases[i];

@@ -1,8 +1,9 @@
 /*
  * canfdi_sim_refctl.h — the simulator's STAND-IN reference controller.
  *
- * This is not the product. It closes the loops of canfdi-sim (and of the
- * plant tests) until the firmware ECU does so over CAN in a later issue:
+ * This is not the product. It closes the loops of canfdi-sim offline
+ * (without --can), of the plant tests and of the model benches; in SIL and
+ * HIL the firmware ECU closes them over CAN. It does not react to faults:
  *   - DC motor speed: PI on the measured speed with back-EMF feed-forward
  *     (u = Psi_nom * w_ref + Kp e + Ki int e), clamped to +-supply, integrator
  *     frozen while the output saturates (conditional integration), always on

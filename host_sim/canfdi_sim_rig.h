@@ -29,13 +29,15 @@
  *                          actuator inputs held.
  * In lockstep the ECU's actuator frames of step k arrive between _begin and
  * _end (lag 1: the command of step k acts over (t_k, t_k+1], the sample at
- * t_k+1 shows it). canfdi_sim_rig_sim_step() builds SimStep(k) for the
- * lockstep protocol of /work/hil_contract.md (sent after the frames of
- * _begin). The `load fan` share of the scenario is never sent (unknown to
- * the ECU).
+ * t_k+1 shows it). canfdi_sim_rig_sim_step() builds SimStep(k) (0x611) for
+ * the HIL lockstep protocol: the plant sends it after the frames of
+ * _begin, the ECU runs its step k when it receives it and answers with its
+ * actuator frames, and the plant ends the step when both have arrived
+ * (host_sim/SCENARIO.md, "canfdi-sim on SocketCAN"; dbc/canfdi.dbc). The
+ * `load fan` share of the scenario is never sent (unknown to the ECU).
  *
  * Actuator frames are applied as decoded, without an E2E check (the plant
- * has no supervisor; the SIL rig never checked either). Every frame is
+ * has no supervisor). Every frame is
  * packed and unpacked only by host_sim's generated PLANT codec
  * (host_sim/gen/canfdi_sim_msg.h).
  *

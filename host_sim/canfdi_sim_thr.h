@@ -3,7 +3,8 @@
  * (all referred to the valve shaft), return spring with a limp-home
  * position, Coulomb and viscous friction, end stops, one H-bridge.
  *
- * Model (substitute parameters of a Bosch DV-E5 class valve, design brief):
+ * Model (substitute parameters of a Bosch DV-E5 class valve; sources of
+ * every default in docs/design.md):
  *   L di/dt = U - R i - K w
  *   J dw/dt = K i - B w - T_spring(theta) - T_c sign(w)
  *   T_spring = k_s (theta - theta_LH) + P tanh((theta - theta_LH) / delta)

@@ -1,5 +1,5 @@
 # host_sim/host_sim.mk — the plant simulator: the plant library (linked into
-# every unit test and into SIL later), the `canfdi-sim` CLI, its pytest
+# every unit test and into the SIL runner), the `canfdi-sim` CLI, its pytest
 # checks and the simulation-rate benchmark.
 #
 #   make $(BUILD)/bin/canfdi-sim   the CLI (part of `make all`; ASan/UBSan)

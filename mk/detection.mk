@@ -1,5 +1,5 @@
-# mk/detection.mk — issue 5's detection figures (a bench: prints and records,
-# never fails on a figure, only when it cannot run).
+# mk/detection.mk — the detection figures of docs/requirements.md (a bench:
+# prints and records, never fails on a figure, only when it cannot run).
 #
 #   make bench-detection   $(BUILD)/bench/detection.json + tables on stdout:
 #                          per catalogue scenario the first trouble code, its

@@ -19,7 +19,7 @@ SENSOR_RANGES = {
     "ThrImot": (-10.0, 10.0), "ThrUsupply": (0.0, 16.0),
 }
 ADC_STEPS = 4096
-# Frames the issue requires, with their cycle in ms (None = event driven).
+# Frames canfdi requires (dbc/README.md), with their cycle in ms (None = event driven).
 REQUIRED = {
     "DcmSensor": 1, "ThrSensor": 1, "DcmActuator": 1, "ThrActuator": 1,
     "SetpointDcm": 10, "SetpointThr": 10, "EcuResidualDcm": 10, "EcuResidualThr": 10,

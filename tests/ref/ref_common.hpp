@@ -125,7 +125,7 @@ inline std::vector<DcmSample> dcm_trace(uint64_t seed, double seconds, double pr
   return out;
 }
 
-// Throttle with the design-brief parameters under the reference position
+// Throttle with the parameters of docs/design.md under the reference position
 // controller: 45 deg + 0.5 Hz sine of +-30 deg + PRBS +-2 deg (50 ms bits);
 // noise TPS 0.003 V, current 0.01 A, supply 0.01 V. Voltage = command
 // clamped to the measured supply; angle = mean of the two TPS.

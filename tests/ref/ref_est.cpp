@@ -6,14 +6,13 @@
 // load with a PRBS speed setpoint, and the throttle under a sine + PRBS
 // angle setpoint; sensor noise on), two seeds each.
 //
-// Acceptance (issue 4): converged parameter estimates within 1 % (relative)
-// of the reference. Checked on the mean over the converged window (DC
-// motor 5..20 s; throttle 15..40 s) and on the final value, for every
-// physical parameter with a nonzero true value (the throttle's voltage
-// offset U_0 ~ 0 is compared in absolute terms: within 0.01 V). The
-// largest pointwise difference over the window is printed as well.
-// The DC-motor trace includes an abrupt +10 % R_A at 20 s; the time to
-// +5 % is printed for both.
+// Acceptance (docs/requirements.md): converged parameter estimates within 1 %
+// (relative) of the reference. Checked on the mean over the converged window
+// (DC motor 5..20 s; throttle 15..40 s) and on the final value, for every
+// physical parameter with a nonzero true value (the throttle's voltage offset
+// U_0 ~ 0 is compared in absolute terms: within 0.01 V). The largest
+// pointwise difference over the window is printed as well. The DC-motor trace
+// includes an abrupt +10 % R_A at 20 s; the time to +5 % is printed for both.
 #include "ref_common.hpp"
 
 namespace {

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """tests/sil/gen_matrix.py -- the SIL fault matrix: every catalogue fault in
-every meaningful mode (issue 5, acceptance 1).
+every meaningful mode, each against its detection budget (docs/requirements.md).
 
     .venv/bin/python tests/sil/gen_matrix.py                 # write the scenarios
     .venv/bin/python tests/sil/gen_matrix.py --report build/bin/canfdi-sil
@@ -10,7 +10,7 @@ Reads dbc/faults.csv (ids, allowed modes, DTC, degradation) and dbc/dtcs.csv,
 and writes tests/sil/matrix/<fault>_<mode>.scn for each fault x allowed mode
 that no single-fault scenario in tests/sil/scenarios/ already covers. The
 expectations come from the catalogue row and the budget classes below (the
-issue's budgets); they are never fitted to an observed delay. A scenario the
+budgets of docs/requirements.md); they are never fitted to an observed delay. A scenario the
 firmware does not meet yet goes to tests/sil/matrix_pending/ with the SAME
 expectations (PENDING below: one line of reason each, from what was observed).
 
@@ -48,38 +48,38 @@ REPORT_SEEDS = (None, 2, 3)  # None = the file's seed
 CLASSES = {
     "comm": dict(
         budget=0.007, inter=(1.0, 0.3),
-        reason="issue: communication faults within the debounce time + 3 frame "
+        reason="requirement: communication faults within the debounce time + 3 frame "
                "cycles; canfdi_rx: timeout after 4 missed 1 ms cycles (direct DTC "
                "debounce); counter/CRC/length/implausible: the DTC's frame debouncer "
                "qualifies on the 3rd bad frame (threshold 6, step 2, canfdi_dtc.c) "
                "-> at most 4 + 3 = 7 ms"),
     "range": dict(
         budget=0.013, inter=(1.0, 0.3),
-        reason="issue: out-of-range faults within the debounce time + 3 frame "
+        reason="requirement: out-of-range faults within the debounce time + 3 frame "
                "cycles; TPS range flag persistence 10 ms (diagnosis flag_on) "
                "-> 10 + 3 = 13 ms"),
     "double_loss": dict(
         budget=0.013, inter=(1.0, 0.3), failsafe_within=0.200,
         reason="both TPS out of range: each code within the out-of-range budget "
-               "(13 ms); issue: limp-home (thr fail_safe) within 200 ms of a "
+               "(13 ms); requirement: limp-home (thr fail_safe) within 200 ms of a "
                "double sensor loss"),
     "offset": dict(
         budget=0.100, inter=(2.0, 0.5),
-        reason="issue: sensor offsets of 2 % of full scale within 100 ms (the "
+        reason="requirement: sensor offsets of 2 % of full scale within 100 ms (the "
                "DC-motor defaults are 0.8-1.7 % FS; the scenarios/ offsets at 1 % FS "
                "carry the same 100 ms); TPS abrupt written at 2 % FS (0.1 V)"),
     "gain": dict(
         budget=1.0, inter=(2.0, 0.5),
         reason="a sensor gain error is a relative change of the sensor's "
-               "characteristic, not an offset: the issue's parametric class, "
+               "characteristic, not an offset: the parametric requirement, "
                "10-20 % changes within 1 s (as scenarios/dcm_speed_gain.scn)"),
     "parametric": dict(
         budget=1.0, inter=(2.0, 0.5),
-        reason="issue: parametric changes of 10-20 % within 1 s (the catalogue's "
+        reason="requirement: parametric changes of 10-20 % within 1 s (the catalogue's "
                "default magnitudes are 10-100 %, i.e. at least as large)"),
     "bridge_a": dict(
         budget=0.010, inter=(1.0, 0.3),
-        reason="issue: switchover within 5 ms of detection; the manager detects a "
+        reason="requirement: switchover within 5 ms of detection; the manager detects a "
                "dead bridge from 3 consecutive samples + lag 1 (canfdi_actmgr.h): "
                "switch and P1A30 within 10 ms (as scenarios/bridge_a_dead.scn); "
                "switch time and speed dip read from the trace"),
@@ -90,9 +90,9 @@ CLASSES = {
                "scenarios/bridges_dead.scn)"),
     "thr_actuator": dict(
         budget=0.500, inter=(2.0, 0.3),
-        reason="no budget in the issue for a dead or jammed throttle actuator; the "
-               "design brief's production figure for throttle plausibility "
-               "monitors (200-500 ms), as scenarios/thr_motor_open.scn and "
+        reason="no canfdi requirement for a dead or jammed throttle actuator; the "
+               "production figure for throttle plausibility monitors "
+               "(200-500 ms, docs/requirements.md), as scenarios/thr_motor_open.scn and "
                "thr_jammed.scn; intermittent on-phase 0.6 s >= the budget"),
 }
 
@@ -123,8 +123,8 @@ EXTRA_DTCS = {
 
 # Magnitude other than the catalogue default, with the reason.
 MAGNITUDE = {
-    ("thr_tps2_drift", "abrupt"): (0.1, "2 % of the 5 V full scale: the issue's "
-                                   "offset standard (mirrors scenarios/tps1_offset_2pct.scn)"),
+    ("thr_tps2_drift", "abrupt"): (0.1, "2 % of the 5 V full scale: the offset "
+                                   "requirement's size (mirrors scenarios/tps1_offset_2pct.scn)"),
 }
 
 # Mode semantics.

@@ -12,7 +12,8 @@
  * QEMU's working directory.
  *
  * With -icount shift=6 SysTick (CLKSOURCE = core clock) advances 1.6 counts
- * per executed instruction (docs/design.md, machine facts), so instructions = counts * 5 / 8.
+ * per executed instruction (docs/design.md, facts about the build machines),
+ * so instructions = counts * 5 / 8.
  */
 #include <stdio.h>
 #include <stdlib.h>

@@ -61,7 +61,8 @@ def sil_run(tmp_path_factory: pytest.TempPathFactory):
 
 def as_lockstep(msgs: Iterable[can.Message], drop_steps: frozenset[int] = frozenset()) -> Iterator[can.Message]:
     """A SIL log as a lockstep HIL bus carries it: SimStep(k) after the plant's
-    frames of step k, before the ECU's (contract: hil_contract.md)."""
+    frames of step k, before the ECU's (the lockstep protocol of
+    host_sim/canfdi_sim_rig.h and host_sim/SCENARIO.md)."""
     db = load_db()
     step_msg = db.get_message_by_frame_id(ID_STEP)
     ecu_ids = {m.frame_id for m in db.messages if "ECU" in m.senders}

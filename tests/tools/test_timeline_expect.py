@@ -17,7 +17,7 @@ from canfdi.timeline import Timeline
 from conftest import as_lockstep, sil_msgs
 
 # fault-free, sensor, comm timeout, bridge switchover, limp-home, parametric,
-# and one that fails in SIL (pending/) so FAIL lines are compared too
+# comm CRC (FAIL lines: data/dtc_status_failing.scn, below)
 SCENARIOS = ["nominal_setpoints", "tps1_open", "dcm_timeout", "bridge_a_dead", "tps_both_lost", "dcm_ra_up",
              "thr_crc"]
 # DTC status sequences: dtc_status / occurrence judged from EcuDtc frames

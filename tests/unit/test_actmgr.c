@@ -1116,7 +1116,7 @@ START_TEST(test_closed_loop_tps_both_lost)
   ck_assert_uint_eq(rig.out.thr_state, CANFDI_DEG_FAIL_SAFE);
   ck_assert_uint_eq(rig.out.thr_reason, CANFDI_FAULT_THR_TPS_BOTH_LOST);
   ck_assert_uint_ne(home_k, 0U);
-  ck_assert_uint_lt(home_k - 1000U, 200U); /* the design brief's budget */
+  ck_assert_uint_lt(home_k - 1000U, 200U); /* limp-home budget, docs/requirements.md */
 }
 END_TEST
 

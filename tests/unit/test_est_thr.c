@@ -1,9 +1,9 @@
 /*
  * test_est_thr.c — acceptance tests of canfdi_est_thr on traces of the
- * host_sim throttle valve (design-brief parameters: R 1.5 Ohm, L 1.5 mH,
- * K 0.383, J 0.0021, B 0.0088, spring 0.087, pretension 0.396, friction
- * 0.284, limp-home 6.5 deg) under the simulator's reference position
- * controller.
+ * host_sim throttle valve (the parameters of docs/design.md: R 1.5 Ohm,
+ * L 1.5 mH, K 0.383, J 0.0021, B 0.0088, spring 0.087, pretension 0.396,
+ * friction 0.284, limp-home 6.5 deg) under the simulator's reference
+ * position controller.
  *
  * Excitation: angle setpoint 45 deg + a 0.5 Hz sine of +-30 deg (sustained
  * motion in both directions over most of the stroke, so that the spring
@@ -31,8 +31,9 @@
  *     gross-error guard (a regression catcher, not the acceptance figure);
  *     the threshold was not moved to fit the data;
  *   sd of R and K below 2 %, of the spring constant below 10 %.
- * J, B, pretension, friction and L are printed, not asserted (they are
- * not acceptance figures of the issue; see the report).
+ * J, B, pretension, friction and L are printed, not asserted (they are not
+ * acceptance figures: docs/requirements.md, accuracy of the building
+ * blocks).
  * A second test holds the angle constant for 30 s after excitation: the
  * estimators keep D > 0 and their trace bound at every step, and R and K
  * stay within their tolerance.

@@ -2,10 +2,10 @@
  * test_meanvar.c — unit tests of canfdi_meanvar (recursive mean/variance
  * with exponential forgetting).
  *
- * Acceptance point (issue 2): the fixed-point estimator agrees with a
- * double-precision computation of the SAME recursion with the SAME quantised
- * alpha, within stated tolerances in LSB, across the full input range,
- * without overflow (UBSan would abort on any signed overflow).
+ * Acceptance point (docs/requirements.md): the fixed-point estimator agrees
+ * with a double-precision computation of the SAME recursion with the SAME
+ * quantised alpha, within stated tolerances in LSB, across the full input
+ * range, without overflow (UBSan would abort on any signed overflow).
  *
  * Tolerances, checked on every sample (a = alpha_q31 / 2^31, u = 2^-53 the
  * unit round-off of double, D = running max of |x - mean| so far):

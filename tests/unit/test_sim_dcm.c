@@ -87,7 +87,7 @@ END_TEST
 
 START_TEST(nominal_load_draws_a_few_amperes)
 {
-  /* The brief: at ~100 rad/s the nominal load must draw a few amperes so
+  /* docs/design.md: at ~100 rad/s the nominal load must draw a few amperes so
    * that resistance faults are observable (no-load current is ~0.4 A). */
   canfdi_sim_dcm_params_t p = cold_params();
   canfdi_sim_dcm_t m;
