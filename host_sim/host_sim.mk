@@ -20,14 +20,12 @@ SIM_LIB_OBJ := $(SIM_LIB_SRC:%.c=$(BUILD)/host/%.o)
 SIM_CLI := $(BUILD)/bin/canfdi-sim
 SIM_E2E_SRC := firmware/comm/canfdi_e2e.c
 
-UNIT_EXTRA_OBJ += $(SIM_LIB_OBJ)
+UNIT_EXTRA_SRC += $(SIM_LIB_SRC)
 
-# The plant tests include the library headers by name.
-# getopt_long/clock_gettime: the pre-included assert.h fixes feature macros
-# before the file can define them, so define them here.
-# SocketCAN (ppoll, the socket API) likewise.
-$(BUILD)/host/$(SIM_MAIN_SRC:.c=.o): HOST_CFLAGS += -D_GNU_SOURCE
-$(BUILD)/host/$(SIM_CAN_SRC:.c=.o): HOST_CFLAGS += -D_GNU_SOURCE
+# getopt_long/clock_gettime and SocketCAN (ppoll, the socket API): feature
+# macros per source (SRC_CFLAGS_, mk/flags.mk).
+SRC_CFLAGS_$(SIM_MAIN_SRC) := -D_GNU_SOURCE
+SRC_CFLAGS_$(SIM_CAN_SRC) := -D_GNU_SOURCE
 
 $(SIM_CLI): $(BUILD)/host/$(SIM_MAIN_SRC:.c=.o) $(BUILD)/host/$(SIM_CAN_SRC:.c=.o) $(SIM_LIB_OBJ) $(BUILD)/host/$(SIM_E2E_SRC:.c=.o)
 	@mkdir -p $(@D)
@@ -38,14 +36,12 @@ ALL_STEPS += $(SIM_CLI)
 # The same CLI for User-Mode Linux (tools/vcan-run): ASan cannot map its
 # shadow memory in UML's smaller address space ("Shadow memory range
 # interleaves with an existing memory mapping"), so this build keeps the
-# strict warnings and UBSan only, at -O2 (lockstep speed). The HIL bench
-# runs this one inside the sandbox.
+# strict warnings and UBSan only, at -O2 (lockstep speed; REL_UBSAN_CFLAGS).
+# The HIL bench runs this one inside the sandbox.
 SIM_CLI_HIL := $(BUILD)/hil/canfdi-sim
 $(SIM_CLI_HIL): $(SIM_MAIN_SRC) $(SIM_CAN_SRC) $(SIM_LIB_SRC) $(SIM_E2E_SRC) $(wildcard host_sim/*.h host_sim/gen/*.h)
 	@mkdir -p $(@D)
-	$(CC) $(WARN_C) -O2 -g -fsanitize=undefined -fno-sanitize-recover=all -D_GNU_SOURCE \
-	  -Ifirmware -I$(BUILD)/gen '-DCANFDI_ASSERT(x)=assert(x)' -include assert.h \
-	  -o $@ $(filter %.c,$^) -lm
+	$(CC) $(REL_UBSAN_CFLAGS) $(SRC_CFLAGS_$(SIM_MAIN_SRC)) -o $@ $(filter %.c,$^) -lm
 
 ALL_STEPS += $(SIM_CLI_HIL)
 
@@ -57,12 +53,12 @@ sim-test: deps $(SIM_CLI) $(SIM_CLI_HIL)
 
 TEST_STEPS += sim-test
 
-# Benchmark: the same sources at -O2, no sanitizers, one translation unit
-# each, linked directly (not the ASan objects above).
+# Benchmark: the same sources in the release build (REL_CFLAGS), one
+# translation unit each, linked directly (not the ASan objects above).
 SIM_BENCH := $(BUILD)/bench/bench_sim
 $(SIM_BENCH): bench/bench_sim.c $(SIM_LIB_SRC) $(SIM_E2E_SRC) $(wildcard host_sim/*.h)
 	@mkdir -p $(@D)
-	$(CC) $(WARN_C) -O2 -Ifirmware -Ihost_sim -o $@ $(filter %.c,$^) -lm
+	$(CC) $(REL_CFLAGS) -Ihost_sim -o $@ $(filter %.c,$^) -lm
 
 bench-sim: $(SIM_BENCH)
 	@$(SIM_BENCH) $(BUILD)/bench/sim.json

@@ -42,7 +42,7 @@ $(SIL_GEN_OBJ): $(SIL_GEN_C)
 	$(CC) $(HOST_CFLAGS) -c $< -o $@
 
 $(SIL_OBJ): $(SIL_GEN_H)
-$(SIL_OBJ): HOST_CFLAGS += -Ihost_sim -I$(SIL_GEN_DIR) -D_POSIX_C_SOURCE=200809L
+SRC_CFLAGS_$(SIL_SRC) := -Ihost_sim -I$(SIL_GEN_DIR) -D_POSIX_C_SOURCE=200809L
 
 $(SIL_BIN): $(SIL_OBJ) $(SIL_GEN_OBJ) $(FW_HOST_OBJ) $(SIL_SIM_OBJ)
 	@mkdir -p $(@D)
@@ -54,7 +54,7 @@ ALL_STEPS += $(SIL_BIN)
 SIL_UNIT := $(BUILD)/sil/test_app
 $(BUILD)/sil/test_app.o: tests/sil/test_app.c
 	@mkdir -p $(@D)
-	$(CC) $(HOST_CFLAGS) -Itests/unit $(shell pkg-config --cflags check 2>/dev/null) -MMD -MP -c $< -o $@
+	$(CC) $(HOST_CFLAGS) -Itests/unit $(CHECK_CFLAGS) -MMD -MP -c $< -o $@
 $(SIL_UNIT): $(BUILD)/sil/test_app.o $(FW_HOST_OBJ)
 	$(CC) $(SAN) -o $@ $^ $(CHECK_LIBS) -lm
 
@@ -91,7 +91,7 @@ TEST_STEPS += sil-matrix
 SIL_REL_BIN := $(BUILD)/bench/canfdi-sil-rel
 $(SIL_REL_BIN): $(SIL_SRC) $(SIL_GEN_C) $(FW_SRC) $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,$(wildcard host_sim/*.c)) $(wildcard host_sim/gen/*.c)
 	@mkdir -p $(@D)
-	$(CC) $(WARN_C) -O2 -g -D_POSIX_C_SOURCE=200809L -Ifirmware -I$(BUILD)/gen -Ihost_sim -I$(SIL_GEN_DIR) -o $@ $(filter %.c,$^) -lm
+	$(CC) $(REL_CFLAGS) $(SRC_CFLAGS_$(SIL_SRC)) -o $@ $(filter %.c,$^) -lm
 
 .PHONY: sil-bench
 sil-bench: $(SIL_REL_BIN)
@@ -109,16 +109,13 @@ sil-long: $(SIL_REL_BIN)
 # same core, so its figures are instruction counts) with -icount, fed the
 # frames of the SIL demo's bus log: instructions per canfdi_app_step from
 # SysTick, and the ECU's frames compared bit for bit with the host run.
-# Semihosting (rdimon) reads the log: a test harness, not firmware.
+# Semihosting (rdimon, PIL_LDFLAGS) reads the log: a test harness, not firmware.
 SIL_PIL_LOG := build/demo/canfdi-demo.log
-# (mk/target.mk is read after this file: its variables are used in recipes
-# only, where they are expanded late; prerequisites name files directly.)
 SIL_PIL_CORES := cortex-m4 cortex-m0plus
 SIL_PIL_ELFS := $(foreach c,$(SIL_PIL_CORES),$(BUILD)/pil/pil_step_$(c).elf)
-$(BUILD)/pil/pil_step_%.elf: tests/sil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c firmware/port/cortexm/canfdi_cortexm.ld
+$(BUILD)/pil/pil_step_%.elf: tests/sil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPT)
 	@mkdir -p $(@D)
-	$(ARM_CC) $(TGT_ARCH_$*) $(TGT_CFLAGS) -nostartfiles --specs=rdimon.specs -Wl,--gc-sections \
-	  -Wl,-T,$(TGT_LDSCRIPT) -o $@ $(filter %.c,$^)
+	$(ARM_CC) $(TGT_ARCH_$*) $(TGT_CFLAGS) $(PIL_LDFLAGS) -o $@ $(filter %.c,$^)
 
 .PHONY: sil-pil
 sil-pil: $(SIL_BIN) $(SIL_PIL_ELFS)
