@@ -6,6 +6,8 @@
 #   flavour        flags                 used for
 #   host           HOST_CFLAGS           unit tests, SIL runner, canfdi-sim,
 #                                        canfdi-ecu-asan ($(BUILD)/host)
+#   host, C11      HOST_C11_CFLAGS       `make unit-c11` ($(BUILD)/unit-c11)
+#   host, 32-bit   HOST_M32_CFLAGS       `make unit-m32` ($(BUILD)/unit-m32)
 #   UBSan only     UBSAN_CFLAGS          canfdi-ecu for the vcan sandbox
 #                                        ($(BUILD)/ubsan)
 #   release        REL_CFLAGS            benches, sil-long, canfdi-ecu-rel,
@@ -57,6 +59,16 @@ REL_UBSAN_CFLAGS := $(REL_CFLAGS) $(UBSAN_CHECKS) $(HOST_ASSERT)
 CHECK_CFLAGS := $(shell pkg-config --cflags check 2>/dev/null)
 CHECK_LIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lm -lrt -lpthread)
 UNIT_CFLAGS := -Itests/unit -Ihost_sim $(CHECK_CFLAGS)
+
+# The unit-test flavours: the host build under C11, and for the 32-bit x86
+# ABI (ILP32, like the Cortex-M targets). Debian's libcheck cannot be
+# installed for i386 beside the amd64 one (the package is not Multi-Arch),
+# so `make deps` unpacks the i386 package's static library into
+# $(CHECK_I386_DIR) (tools/deps.sh).
+HOST_C11_CFLAGS := $(patsubst $(C_STD),-std=c11,$(HOST_CFLAGS))
+HOST_M32_CFLAGS := -m32 $(HOST_CFLAGS)
+CHECK_I386_DIR := .deps/check-i386
+HOST_M32_LDFLAGS := -m32 -L$(CHECK_I386_DIR)
 
 # Cortex-M: the M4 is treated as the no-FPU variant (soft-float ABI, no VFP
 # code); the M0+ (ARMv6-M) has no hardware divide and no 32x32->64 multiply.
