@@ -4,7 +4,10 @@
 #
 #   make $(BUILD)/bin/canfdi-sim   the CLI (part of `make all`; ASan/UBSan)
 #   make $(BUILD)/hil/canfdi-sim   the CLI for User-Mode Linux (UBSan only, -O2)
-#   make sim-test                  pytest tests/sim (part of `make test`)
+#   make sim-unit                  the libcheck tests of the plant library
+#                                  (tests/sim/test_*.c, ASan/UBSan)
+#   make sim-test                  sim-unit, then pytest tests/sim (part of
+#                                  `make test`)
 #   make bench-sim                 $(BUILD)/bench/sim.json (part of `make bench`)
 
 # The library: every host_sim/*.c except the CLI's main, plus the generated
@@ -45,10 +48,28 @@ $(SIM_CLI_HIL): $(SIM_MAIN_SRC) $(SIM_CAN_SRC) $(SIM_LIB_SRC) $(SIM_E2E_SRC) $(w
 
 ALL_STEPS += $(SIM_CLI_HIL)
 
-.PHONY: sim-test bench-sim
+# The plant library's unit tests: libcheck programs built and linked like
+# the firmware's (mk/unit.mk: the shared main tests/unit/unit_main.h, the
+# host objects), in $(BUILD)/sim/.
+SIM_UNIT_SRC := $(sort $(wildcard tests/sim/test_*.c))
+SIM_UNIT_BIN := $(SIM_UNIT_SRC:tests/sim/%.c=$(BUILD)/sim/%)
+
+$(BUILD)/sim/%.o: tests/sim/%.c
+	@mkdir -p $(@D)
+	$(CC) $(HOST_CFLAGS) $(UNIT_CFLAGS) $(SRC_CFLAGS_$<) -MMD -MP -c $< -o $@
+
+$(BUILD)/sim/%: $(BUILD)/sim/%.o $(FW_HOST_OBJ) $(UNIT_EXTRA_OBJ)
+	$(CC) $(SAN) -o $@ $^ $(CHECK_LIBS) -lm
+
+ALL_STEPS += $(SIM_UNIT_BIN)
+
+.PHONY: sim-unit sim-test bench-sim
+sim-unit: deps $(SIM_UNIT_BIN)
+	@$(call run_check_programs,sim-unit,$(SIM_UNIT_BIN))
+
 # tests/sim/test_canfdi_sim_can.py runs the UML build on vcan0 and skips
 # (saying why) where there is none: run it through tools/vcan-run.
-sim-test: deps $(SIM_CLI) $(SIM_CLI_HIL)
+sim-test: deps sim-unit $(SIM_CLI) $(SIM_CLI_HIL)
 	CANFDI_SIM=$(CURDIR)/$(SIM_CLI) CANFDI_SIM_HIL=$(CURDIR)/$(SIM_CLI_HIL) $(PY) -m pytest tests/sim -q
 
 TEST_STEPS += sim-test

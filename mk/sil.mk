@@ -50,19 +50,10 @@ $(SIL_BIN): $(SIL_OBJ) $(SIL_GEN_OBJ) $(FW_HOST_OBJ) $(SIL_SIM_OBJ)
 
 ALL_STEPS += $(SIL_BIN)
 
-# Unit tests of the application loop without plants (libcheck, ASan/UBSan).
-SIL_UNIT := $(BUILD)/sil/test_app
-$(BUILD)/sil/test_app.o: tests/sil/test_app.c
-	@mkdir -p $(@D)
-	$(CC) $(HOST_CFLAGS) -Itests/unit $(CHECK_CFLAGS) -MMD -MP -c $< -o $@
-$(SIL_UNIT): $(BUILD)/sil/test_app.o $(FW_HOST_OBJ)
-	$(CC) $(SAN) -o $@ $^ $(CHECK_LIBS) -lm
-
-ALL_STEPS += $(SIL_UNIT)
-
+# The unit tests of the application loop without plants are
+# tests/unit/test_app.c (make unit, mk/unit.mk).
 .PHONY: sil-test sil-pending
-sil-test: $(SIL_BIN) $(SIL_UNIT)
-	@CK_FORK=no $(SIL_UNIT)
+sil-test: $(SIL_BIN)
 	@bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_SCN)
 
 sil-pending: $(SIL_BIN)
