@@ -1,4 +1,4 @@
-# canfdi — the one entry point. `make help` lists the targets.
+# canfdi — the one entry point. `make help` lists the targets (mk/help.mk).
 #
 # Areas add their own rules in fragments (mk/*.mk, dbc/dbc.mk,
 # host_sim/host_sim.mk, bench/bench.mk) and hook into the stable targets
@@ -32,16 +32,6 @@ include mk/unit.mk
 .PHONY: all deps test unit demo firmware bench clean help
 # Keep object files of test programs between runs.
 .SECONDARY:
-
-help:
-	@echo "canfdi make targets:"
-	@echo "  make deps      install Debian packages and the Python venv (idempotent)"
-	@echo "  make demo      run the demonstration (see README)"
-	@echo "  make test      everything CI checks: unit tests under ASan/UBSan, target guard, ..."
-	@echo "  make firmware  cross-compile for Cortex-M4 and Cortex-M0+, check no heap/float"
-	@echo "  make bench     print and record figures under $(BUILD)/bench/"
-	@echo "  make all       build host libraries, unit tests and tools"
-	@echo "  make clean     remove $(BUILD)/"
 
 deps:
 	@bash tools/deps.sh
