@@ -23,7 +23,7 @@ Demonstrations
   make hil                  the HIL demo: canfdi-ecu + canfdi-sim in lockstep on vcan0
 
 Tests (`make test` runs those marked *)
-  make test                 everything CI checks (a fresh clone takes about 15 min)
+  make test                 everything CI checks (about 12 min from a fresh clone on 2 cores)
   make unit               * firmware unit tests, libcheck, ASan/UBSan, C99, x86-64 (CK_FORK=yes isolates)
   make unit-c11           * the same unit tests built as C11
   make unit-m32           * the same unit tests built for 32-bit x86 (ILP32, like the targets)
