@@ -9,7 +9,7 @@
  * (L_A/R_A ~ 4.5..5 ms). With h = 100 us, |lambda*h| <= 0.095, RK4 is stable
  * up to 2.78 and its local relative error is ~ (lambda*h)^5 / 120 ~ 6e-8, so
  * trajectories agree with the exact solution to ~1e-7 relative over many
- * time constants (tests/unit/test_sim_ode.c measures it against the
+ * time constants (tests/sim/test_sim_dcm.c measures it against the
  * analytic solution of the linear motor model). The plants' non-smooth
  * terms (Coulomb friction, stiction, end stops) are not integrated through:
  * their mode is frozen for one sub-step and events are resolved between

@@ -4,7 +4,10 @@
 #
 #   make $(BUILD)/bin/canfdi-sim   the CLI (part of `make all`; ASan/UBSan)
 #   make $(BUILD)/hil/canfdi-sim   the CLI for User-Mode Linux (UBSan only, -O2)
-#   make sim-test                  pytest tests/sim (part of `make test`)
+#   make sim-unit                  the libcheck tests of the plant library
+#                                  (tests/sim/test_*.c, ASan/UBSan)
+#   make sim-test                  sim-unit, then pytest tests/sim (part of
+#                                  `make test`)
 #   make bench-sim                 $(BUILD)/bench/sim.json (part of `make bench`)
 
 # The library: every host_sim/*.c except the CLI's main, plus the generated
@@ -20,14 +23,12 @@ SIM_LIB_OBJ := $(SIM_LIB_SRC:%.c=$(BUILD)/host/%.o)
 SIM_CLI := $(BUILD)/bin/canfdi-sim
 SIM_E2E_SRC := firmware/comm/canfdi_e2e.c
 
-UNIT_EXTRA_OBJ += $(SIM_LIB_OBJ)
+UNIT_EXTRA_SRC += $(SIM_LIB_SRC)
 
-# The plant tests include the library headers by name.
-# getopt_long/clock_gettime: the pre-included assert.h fixes feature macros
-# before the file can define them, so define them here.
-# SocketCAN (ppoll, the socket API) likewise.
-$(BUILD)/host/$(SIM_MAIN_SRC:.c=.o): HOST_CFLAGS += -D_GNU_SOURCE
-$(BUILD)/host/$(SIM_CAN_SRC:.c=.o): HOST_CFLAGS += -D_GNU_SOURCE
+# getopt_long/clock_gettime and SocketCAN (ppoll, the socket API): feature
+# macros per source (SRC_CFLAGS_, mk/flags.mk).
+SRC_CFLAGS_$(SIM_MAIN_SRC) := -D_GNU_SOURCE
+SRC_CFLAGS_$(SIM_CAN_SRC) := -D_GNU_SOURCE
 
 $(SIM_CLI): $(BUILD)/host/$(SIM_MAIN_SRC:.c=.o) $(BUILD)/host/$(SIM_CAN_SRC:.c=.o) $(SIM_LIB_OBJ) $(BUILD)/host/$(SIM_E2E_SRC:.c=.o)
 	@mkdir -p $(@D)
@@ -38,31 +39,47 @@ ALL_STEPS += $(SIM_CLI)
 # The same CLI for User-Mode Linux (tools/vcan-run): ASan cannot map its
 # shadow memory in UML's smaller address space ("Shadow memory range
 # interleaves with an existing memory mapping"), so this build keeps the
-# strict warnings and UBSan only, at -O2 (lockstep speed). The HIL bench
-# runs this one inside the sandbox.
+# strict warnings and UBSan only, at -O2 (lockstep speed; REL_UBSAN_CFLAGS).
+# The HIL bench runs this one inside the sandbox.
 SIM_CLI_HIL := $(BUILD)/hil/canfdi-sim
 $(SIM_CLI_HIL): $(SIM_MAIN_SRC) $(SIM_CAN_SRC) $(SIM_LIB_SRC) $(SIM_E2E_SRC) $(wildcard host_sim/*.h host_sim/gen/*.h)
 	@mkdir -p $(@D)
-	$(CC) $(WARN_C) -O2 -g -fsanitize=undefined -fno-sanitize-recover=all -D_GNU_SOURCE \
-	  -Ifirmware -I$(BUILD)/gen '-DCANFDI_ASSERT(x)=assert(x)' -include assert.h \
-	  -o $@ $(filter %.c,$^) -lm
+	$(CC) $(REL_UBSAN_CFLAGS) $(SRC_CFLAGS_$(SIM_MAIN_SRC)) -o $@ $(filter %.c,$^) -lm
 
 ALL_STEPS += $(SIM_CLI_HIL)
 
-.PHONY: sim-test bench-sim
+# The plant library's unit tests: libcheck programs built and linked like
+# the firmware's (mk/unit.mk: the shared main tests/unit/unit_main.h, the
+# host objects), in $(BUILD)/sim/.
+SIM_UNIT_SRC := $(sort $(wildcard tests/sim/test_*.c))
+SIM_UNIT_BIN := $(SIM_UNIT_SRC:tests/sim/%.c=$(BUILD)/sim/%)
+
+$(BUILD)/sim/%.o: tests/sim/%.c
+	@mkdir -p $(@D)
+	$(CC) $(HOST_CFLAGS) $(UNIT_CFLAGS) $(SRC_CFLAGS_$<) -MMD -MP -c $< -o $@
+
+$(BUILD)/sim/%: $(BUILD)/sim/%.o $(FW_HOST_OBJ) $(UNIT_EXTRA_OBJ)
+	$(CC) $(SAN) -o $@ $^ $(CHECK_LIBS) -lm
+
+ALL_STEPS += $(SIM_UNIT_BIN)
+
+.PHONY: sim-unit sim-test bench-sim
+sim-unit: deps $(SIM_UNIT_BIN)
+	@$(call run_check_programs,sim-unit,$(SIM_UNIT_BIN))
+
 # tests/sim/test_canfdi_sim_can.py runs the UML build on vcan0 and skips
 # (saying why) where there is none: run it through tools/vcan-run.
-sim-test: deps $(SIM_CLI) $(SIM_CLI_HIL)
+sim-test: deps sim-unit $(SIM_CLI) $(SIM_CLI_HIL)
 	CANFDI_SIM=$(CURDIR)/$(SIM_CLI) CANFDI_SIM_HIL=$(CURDIR)/$(SIM_CLI_HIL) $(PY) -m pytest tests/sim -q
 
 TEST_STEPS += sim-test
 
-# Benchmark: the same sources at -O2, no sanitizers, one translation unit
-# each, linked directly (not the ASan objects above).
+# Benchmark: the same sources in the release build (REL_CFLAGS), one
+# translation unit each, linked directly (not the ASan objects above).
 SIM_BENCH := $(BUILD)/bench/bench_sim
 $(SIM_BENCH): bench/bench_sim.c $(SIM_LIB_SRC) $(SIM_E2E_SRC) $(wildcard host_sim/*.h)
 	@mkdir -p $(@D)
-	$(CC) $(WARN_C) -O2 -Ifirmware -Ihost_sim -o $@ $(filter %.c,$^) -lm
+	$(CC) $(REL_CFLAGS) -Ihost_sim -o $@ $(filter %.c,$^) -lm
 
 bench-sim: $(SIM_BENCH)
 	@$(SIM_BENCH) $(BUILD)/bench/sim.json

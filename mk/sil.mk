@@ -42,7 +42,7 @@ $(SIL_GEN_OBJ): $(SIL_GEN_C)
 	$(CC) $(HOST_CFLAGS) -c $< -o $@
 
 $(SIL_OBJ): $(SIL_GEN_H)
-$(SIL_OBJ): HOST_CFLAGS += -Ihost_sim -I$(SIL_GEN_DIR) -D_POSIX_C_SOURCE=200809L
+SRC_CFLAGS_$(SIL_SRC) := -Ihost_sim -I$(SIL_GEN_DIR) -D_POSIX_C_SOURCE=200809L
 
 $(SIL_BIN): $(SIL_OBJ) $(SIL_GEN_OBJ) $(FW_HOST_OBJ) $(SIL_SIM_OBJ)
 	@mkdir -p $(@D)
@@ -50,19 +50,10 @@ $(SIL_BIN): $(SIL_OBJ) $(SIL_GEN_OBJ) $(FW_HOST_OBJ) $(SIL_SIM_OBJ)
 
 ALL_STEPS += $(SIL_BIN)
 
-# Unit tests of the application loop without plants (libcheck, ASan/UBSan).
-SIL_UNIT := $(BUILD)/sil/test_app
-$(BUILD)/sil/test_app.o: tests/sil/test_app.c
-	@mkdir -p $(@D)
-	$(CC) $(HOST_CFLAGS) -Itests/unit $(shell pkg-config --cflags check 2>/dev/null) -MMD -MP -c $< -o $@
-$(SIL_UNIT): $(BUILD)/sil/test_app.o $(FW_HOST_OBJ)
-	$(CC) $(SAN) -o $@ $^ $(CHECK_LIBS) -lm
-
-ALL_STEPS += $(SIL_UNIT)
-
+# The unit tests of the application loop without plants are
+# tests/unit/test_app.c (make unit, mk/unit.mk).
 .PHONY: sil-test sil-pending
-sil-test: $(SIL_BIN) $(SIL_UNIT)
-	@CK_FORK=no $(SIL_UNIT)
+sil-test: $(SIL_BIN)
 	@bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_SCN)
 
 sil-pending: $(SIL_BIN)
@@ -91,7 +82,7 @@ TEST_STEPS += sil-matrix
 SIL_REL_BIN := $(BUILD)/bench/canfdi-sil-rel
 $(SIL_REL_BIN): $(SIL_SRC) $(SIL_GEN_C) $(FW_SRC) $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,$(wildcard host_sim/*.c)) $(wildcard host_sim/gen/*.c)
 	@mkdir -p $(@D)
-	$(CC) $(WARN_C) -O2 -g -D_POSIX_C_SOURCE=200809L -Ifirmware -I$(BUILD)/gen -Ihost_sim -I$(SIL_GEN_DIR) -o $@ $(filter %.c,$^) -lm
+	$(CC) $(REL_CFLAGS) $(SRC_CFLAGS_$(SIL_SRC)) -o $@ $(filter %.c,$^) -lm
 
 .PHONY: sil-bench
 sil-bench: $(SIL_REL_BIN)
@@ -109,16 +100,13 @@ sil-long: $(SIL_REL_BIN)
 # same core, so its figures are instruction counts) with -icount, fed the
 # frames of the SIL demo's bus log: instructions per canfdi_app_step from
 # SysTick, and the ECU's frames compared bit for bit with the host run.
-# Semihosting (rdimon) reads the log: a test harness, not firmware.
+# Semihosting (rdimon, PIL_LDFLAGS) reads the log: a test harness, not firmware.
 SIL_PIL_LOG := build/demo/canfdi-demo.log
-# (mk/target.mk is read after this file: its variables are used in recipes
-# only, where they are expanded late; prerequisites name files directly.)
 SIL_PIL_CORES := cortex-m4 cortex-m0plus
 SIL_PIL_ELFS := $(foreach c,$(SIL_PIL_CORES),$(BUILD)/pil/pil_step_$(c).elf)
-$(BUILD)/pil/pil_step_%.elf: tests/sil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c firmware/port/cortexm/canfdi_cortexm.ld
+$(BUILD)/pil/pil_step_%.elf: tests/sil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPT)
 	@mkdir -p $(@D)
-	$(ARM_CC) $(TGT_ARCH_$*) $(TGT_CFLAGS) -nostartfiles --specs=rdimon.specs -Wl,--gc-sections \
-	  -Wl,-T,$(TGT_LDSCRIPT) -o $@ $(filter %.c,$^)
+	$(ARM_CC) $(TGT_ARCH_$*) $(TGT_CFLAGS) $(PIL_LDFLAGS) -o $@ $(filter %.c,$^)
 
 .PHONY: sil-pil
 sil-pil: $(SIL_BIN) $(SIL_PIL_ELFS)
@@ -129,8 +117,10 @@ sil-pil: $(SIL_BIN) $(SIL_PIL_ELFS)
 	    -semihosting-config enable=on,target=native -kernel $(BUILD)/pil/pil_step_$$c.elf; done
 
 # Unit tests that close the loop with the plants decode the ECU's frames
-# with the tester codec above (pack and unpack of every message).
-UNIT_EXTRA_OBJ += $(SIL_GEN_OBJ)
-SIL_CODEC_UNIT_OBJ := $(BUILD)/unit/test_app_regress.o $(BUILD)/unit/test_app_out.o
-$(SIL_CODEC_UNIT_OBJ): $(SIL_GEN_H)
-$(SIL_CODEC_UNIT_OBJ): HOST_CFLAGS += -I$(SIL_GEN_DIR)
+# with the tester codec above (pack and unpack of every message), in every
+# unit-test flavour.
+UNIT_EXTRA_SRC += $(SIL_GEN_C)
+SIL_CODEC_UNIT_TESTS := test_app_regress test_app_out
+$(foreach t,$(SIL_CODEC_UNIT_TESTS),$(eval SRC_CFLAGS_tests/unit/$(t).c := -I$(SIL_GEN_DIR)))
+$(foreach t,$(SIL_CODEC_UNIT_TESTS),$(BUILD)/unit/$(t).o $(BUILD)/unit-c11/obj/tests/unit/$(t).o \
+  $(BUILD)/unit-m32/obj/tests/unit/$(t).o): $(SIL_GEN_H)

@@ -8,22 +8,9 @@
 # inline reached from the entry point, no float/double keyword in firmware.
 # Leaves $(BUILD)/target/<core>/canfdi.elf (+ .map) and prints text/data/bss.
 
-ARM_PREFIX ?= arm-none-eabi-
-ARM_CC := $(ARM_PREFIX)gcc
-ARM_NM := $(ARM_PREFIX)nm
-ARM_SIZE := $(ARM_PREFIX)size
-
+# The toolchain and the flags (TGT_ARCH_<core>, TGT_CFLAGS, TGT_LDFLAGS) are
+# in mk/flags.mk.
 TGT_CORES := cortex-m4 cortex-m0plus
-# The M4 is treated as the no-FPU variant (soft-float ABI, no VFP code).
-TGT_ARCH_cortex-m4 := -mcpu=cortex-m4 -mthumb -mfloat-abi=soft
-# ARMv6-M: no hardware divide, no 32x32->64 multiply instruction.
-TGT_ARCH_cortex-m0plus := -mcpu=cortex-m0plus -mthumb -mfloat-abi=soft
-
-TGT_CFLAGS := $(WARN_C) -Os -g -ffunction-sections -fdata-sections \
-              -Ifirmware -I$(BUILD)/gen -I$(BUILD)/target
-TGT_LDSCRIPT := firmware/port/cortexm/canfdi_cortexm.ld
-TGT_LDFLAGS := -nostartfiles --specs=nano.specs --specs=nosys.specs \
-               -Wl,--gc-sections -Wl,-T,$(TGT_LDSCRIPT)
 
 # Firmware sources generated outside firmware/ (e.g. a DBC codec under
 # $(BUILD)/gen) may be appended here by their fragment.

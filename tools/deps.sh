@@ -1,7 +1,13 @@
 #!/usr/bin/env bash
 # Install what canfdi needs and nothing else; idempotent.
-#   1. Debian packages (only those missing; apt-get runs only if one is).
-#   2. A project-local Python venv (.venv) with the pinned requirements.txt,
+#   1. Debian packages (only those missing; apt-get runs only if one is),
+#      some of them for i386 (the 32-bit unit tests, `make unit-m32`): the
+#      i386 architecture is added to dpkg once.
+#   2. The i386 libcheck: Debian's `check` is not Multi-Arch, so check:i386
+#      cannot be installed beside check:amd64; its .deb is downloaded
+#      (apt-get download) and its static library unpacked into
+#      .deps/check-i386/ (the headers are the same for both).
+#   3. A project-local Python venv (.venv) with the pinned requirements.txt,
 #      reinstalled only when requirements.txt changes; the editable tools
 #      package (console commands canfdi-*) reinstalled when requirements.txt
 #      or tools/pyproject.toml changes.
@@ -11,10 +17,44 @@ cd "$(dirname "$0")/.."
 
 APT_PACKAGES=(
   build-essential pkg-config check libeigen3-dev valgrind
+  gcc-multilib libsubunit-dev:i386
   gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi qemu-system-arm
   can-utils user-mode-linux kmod iproute2
   python3 python3-venv
 )
+
+# Extra package groups a make target asks for (`tools/deps.sh GROUP...`),
+# not needed by `make test`: format (clang-format, `make format`).
+for group in "$@"; do
+  case "$group" in
+    format) APT_PACKAGES+=(clang-format) ;;
+    *) echo "deps: error: unknown package group: $group" >&2; exit 2 ;;
+  esac
+done
+
+SUDO=()
+need_root() { # what-for
+  if [ "$(id -u)" -ne 0 ] && ((${#SUDO[@]} == 0)); then
+    if command -v sudo >/dev/null; then SUDO=(sudo); else
+      echo "deps: error: need root (or sudo) to $1" >&2; exit 1
+    fi
+  fi
+}
+export DEBIAN_FRONTEND=noninteractive
+# A failing index (e.g. a mirror in the middle of a sync) does not stop the
+# install: apt-get install says so if a package is really not to be had.
+apt_update() {
+  "${SUDO[@]}" apt-get update -q </dev/null || echo "deps: warning: apt-get update reported errors (above); going on"
+}
+
+updated=no
+if ! dpkg --print-foreign-architectures | grep -qx i386; then
+  need_root "add the i386 architecture to dpkg"
+  echo "deps: adding the i386 architecture to dpkg (32-bit unit tests)"
+  "${SUDO[@]}" dpkg --add-architecture i386
+  apt_update
+  updated=yes
+fi
 
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
@@ -24,17 +64,39 @@ for p in "${APT_PACKAGES[@]}"; do
 done
 if ((${#missing[@]})); then
   echo "deps: installing Debian packages: ${missing[*]}"
-  SUDO=()
-  if [ "$(id -u)" -ne 0 ]; then
-    if command -v sudo >/dev/null; then SUDO=(sudo); else
-      echo "deps: error: need root (or sudo) to install: ${missing[*]}" >&2; exit 1
-    fi
-  fi
-  export DEBIAN_FRONTEND=noninteractive
-  "${SUDO[@]}" apt-get update -q </dev/null
+  need_root "install: ${missing[*]}"
+  [ "$updated" = yes ] || apt_update
+  updated=yes
   "${SUDO[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}" </dev/null
 else
   echo "deps: Debian packages present (${#APT_PACKAGES[@]})"
+fi
+
+# The i386 libcheck, unpacked from the Debian package of the amd64 one's
+# version (mk/flags.mk: CHECK_I386_DIR).
+CHECK_I386_DIR=.deps/check-i386
+check_version=$(dpkg-query -W -f='${Version}' check)
+if [ "$(cat "$CHECK_I386_DIR/version" 2>/dev/null)" != "$check_version" ] || \
+   [ ! -f "$CHECK_I386_DIR/libcheck_pic.a" ]; then
+  echo "deps: unpacking libcheck $check_version for i386 into $CHECK_I386_DIR"
+  tmp=$(mktemp -d)
+  trap 'rm -rf "$tmp"' EXIT
+  # apt-get download run by root fetches as the user _apt
+  if [ "$(id -u)" -eq 0 ] && id _apt >/dev/null 2>&1; then chown _apt "$tmp"; fi
+  if ! (cd "$tmp" && apt-get download -q "check:i386=$check_version" </dev/null >/dev/null); then
+    need_root "refresh the package lists"
+    [ "$updated" = yes ] || apt_update
+    (cd "$tmp" && apt-get download -q "check:i386=$check_version" </dev/null >/dev/null)
+  fi
+  dpkg-deb -x "$tmp"/check_*_i386.deb "$tmp/x"
+  rm -rf "$CHECK_I386_DIR"
+  mkdir -p "$CHECK_I386_DIR"
+  cp "$tmp"/x/usr/lib/i386-linux-gnu/libcheck.a "$tmp"/x/usr/lib/i386-linux-gnu/libcheck_pic.a "$CHECK_I386_DIR/"
+  echo "$check_version" > "$CHECK_I386_DIR/version"
+  rm -rf "$tmp"
+  trap - EXIT
+else
+  echo "deps: i386 libcheck present ($CHECK_I386_DIR)"
 fi
 
 # Debian's interpreter, not a pyenv shim: the venv must start fast, also

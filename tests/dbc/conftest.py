@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import logging
 import os
+import shlex
 import subprocess
 import sys
 import warnings
@@ -21,12 +22,12 @@ sys.path.insert(0, str(ROOT / "dbc"))
 
 DBC = ROOT / "dbc" / "canfdi.dbc"
 
-# Same flags as the Makefile's WARN_C and SAN: the generated codecs must
-# compile under them unchanged.
-WARN_C = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-Wconversion",
-          "-Wsign-conversion", "-Wdouble-promotion", "-Wfloat-equal", "-Wshadow",
-          "-Wstrict-prototypes", "-Wmissing-prototypes", "-Wundef"]
-SAN = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+
+def make_flags(name: str) -> list[str]:
+    """A flag set of mk/flags.mk (`make -s print-NAME`), as arguments."""
+    res = subprocess.run(["make", "-s", "--no-print-directory", "-C", str(ROOT), f"print-{name}"],
+                         capture_output=True, text=True, check=True)
+    return shlex.split(res.stdout)
 
 
 def load_strict(path: Path = DBC):
@@ -56,12 +57,14 @@ def db():
 def build_harness(tmp_path_factory, extra: list[str]):
     out = tmp_path_factory.mktemp("harness") / "harness"
     cc = os.environ.get("CC", "gcc")
-    cmd = [cc, *WARN_C, *extra, "-O1", "-g", *SAN, "-I" + str(ROOT / "firmware"),
-           "-I" + str(ROOT / "host_sim" / "gen"), "-include", "assert.h", "-DCANFDI_ASSERT(x)=assert(x)",
+    # The host build of the firmware (warnings, ASan/UBSan, asserts): the
+    # generated codecs must compile under it unchanged. Its include folders
+    # are relative to the repository.
+    cmd = [cc, *make_flags("HOST_CFLAGS"), *extra, "-I" + str(ROOT / "host_sim" / "gen"),
            str(ROOT / "tests/dbc/harness.c"), str(ROOT / "firmware/comm/canfdi_e2e.c"),
            str(ROOT / "firmware/comm/gen/canfdi_msg.c"), str(ROOT / "host_sim/gen/canfdi_sim_msg.c"),
            "-o", str(out)]
-    subprocess.run(cmd, check=True, capture_output=True, text=True)
+    subprocess.run(cmd, check=True, capture_output=True, text=True, cwd=ROOT)
 
     def run(lines: list[str]) -> list[str]:
         res = subprocess.run([str(out)], input="\n".join(lines) + "\n", capture_output=True,

@@ -8,8 +8,7 @@
 REF_SRC := $(sort $(wildcard tests/ref/ref_*.cpp))
 REF_BIN := $(REF_SRC:tests/ref/%.cpp=$(BUILD)/ref/%)
 REF_HDR := $(wildcard tests/ref/*.hpp)
-REF_CXXFLAGS := -std=c++17 -O1 -g -Wall -Wextra -Werror $(SAN) -I/usr/include/eigen3 \
-                -Ifirmware -Ihost_sim -I$(BUILD)/gen -Itests/ref
+# REF_CXXFLAGS (C++17, ASan/UBSan, Eigen): mk/flags.mk.
 
 $(BUILD)/ref/%: tests/ref/%.cpp $(REF_HDR) $(FW_HOST_OBJ) $(UNIT_EXTRA_OBJ)
 	@mkdir -p $(@D)

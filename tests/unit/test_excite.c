@@ -134,7 +134,7 @@ static double line_power(const double *x, long n, long m)
   double re = 0.0;
   double im = 0.0;
   for (long k = 0; k < n; k++) {
-    const double ph = TWO_PI * (double)((m * k) % n) / (double)n;
+    const double ph = TWO_PI * (double)(((long long)m * k) % n) / (double)n;
     re += x[k] * cos(ph);
     im -= x[k] * sin(ph);
   }

@@ -841,7 +841,7 @@ START_TEST(test_file_truncated_and_corrupt)
   int fd = open(path, O_RDWR);
   ck_assert_int_ge(fd, 0);
   uint8_t byte = 0U;
-  const off_t at = (off_t)newest * FILE_BANK + 40;
+  const off_t at = (off_t)newest * (off_t)FILE_BANK + 40;
   ck_assert_int_eq((int)pread(fd, &byte, 1U, at), 1);
   byte ^= 0x04U;
   ck_assert_int_eq((int)pwrite(fd, &byte, 1U, at), 1);
@@ -852,7 +852,7 @@ START_TEST(test_file_truncated_and_corrupt)
   ck_assert_uint_eq(nvm.bank_state[newest], CANFDI_NVM_BANK_CORRUPT);
   canfdi_nvm_file_close(&f);
   /* both: no image, both reported */
-  const off_t at2 = (off_t)(1 - newest) * FILE_BANK + 2;
+  const off_t at2 = (off_t)(1 - newest) * (off_t)FILE_BANK + 2;
   ck_assert_int_eq((int)pread(fd, &byte, 1U, at2), 1);
   byte ^= 0x40U;
   ck_assert_int_eq((int)pwrite(fd, &byte, 1U, at2), 1);
