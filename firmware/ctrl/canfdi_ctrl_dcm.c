@@ -3,6 +3,7 @@
  */
 #include "ctrl/canfdi_ctrl_dcm.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 /* num/den as a Q16.16 compile-time constant. */
@@ -130,11 +131,11 @@ static int32_t dcm_rate_limit(canfdi_ctrl_dcm_t *c, int32_t ref_q16, int32_t w_q
   if ((c->dref_max_q16 > 0) && (d > c->dref_max_q16)) {
     c->ref_lim_q16 = canfdi_add_s32_sat(c->ref_lim_q16, c->dref_max_q16);
     i_ff = c->i_acc_q16;
-    c->diag.rate_limited++;
+    canfdi_count_inc(&c->diag.rate_limited);
   } else if ((c->dref_max_q16 > 0) && (d < -c->dref_max_q16)) {
     c->ref_lim_q16 = canfdi_sub_s32_sat(c->ref_lim_q16, c->dref_max_q16);
     i_ff = -c->i_acc_q16;
-    c->diag.rate_limited++;
+    canfdi_count_inc(&c->diag.rate_limited);
   } else {
     c->ref_lim_q16 = ref_q16;
   }
@@ -158,7 +159,7 @@ int32_t canfdi_ctrl_dcm_step(canfdi_ctrl_dcm_t *c, const canfdi_ctrl_dcm_in_t *i
   c->out.u_limit_V_q16 = lim;
   if ((ref > w_max) || (ref < -w_max)) {
     ref = canfdi_clamp_s32(ref, -w_max, w_max);
-    c->diag.ref_clamped++;
+    canfdi_count_inc(&c->diag.ref_clamped);
   }
 
   if (mode == CANFDI_CTRL_OFF) {
@@ -170,7 +171,7 @@ int32_t canfdi_ctrl_dcm_step(canfdi_ctrl_dcm_t *c, const canfdi_ctrl_dcm_in_t *i
     c->out.speed_ref_rad_s_q16 = c->ref_lim_q16;
     c->out.u_sat = 0;
     u = 0;
-    c->diag.off_steps++;
+    canfdi_count_inc(&c->diag.off_steps);
   } else {
     /* The voltage limit of the last step holds the speed integrator. */
     const bool aw = (cal->anti_windup == CANFDI_PI_AW_CLAMP);
@@ -184,7 +185,7 @@ int32_t canfdi_ctrl_dcm_step(canfdi_ctrl_dcm_t *c, const canfdi_ctrl_dcm_in_t *i
 
     i_ref = canfdi_pi_step_q16(&c->speed_pi, r, w, i_ff, hold);
     if (canfdi_pi_saturation(&c->speed_pi) != 0) {
-      c->diag.ia_limited++;
+      canfdi_count_inc(&c->diag.ia_limited);
     }
     u_ff = dcm_mac2_q16(cal->ra_ohm_q16, i_ref, cal->psi_Vs_q16, w);
     if (inner) {
@@ -193,14 +194,14 @@ int32_t canfdi_ctrl_dcm_step(canfdi_ctrl_dcm_t *c, const canfdi_ctrl_dcm_in_t *i
       /* Bypass: the held current integrator carries the learned model error. */
       u = canfdi_clamp_s32(canfdi_add_s32_sat(u_ff, canfdi_pi_integral_q16(&c->cur_pi)), -lim,
                            lim);
-      c->diag.model_steps++;
+      canfdi_count_inc(&c->diag.model_steps);
     }
     c->out.u_sat = (u >= lim) ? 1 : ((u <= -lim) ? -1 : 0);
     if (lim == 0) {
       c->out.u_sat = 0; /* no supply: nothing to wind against in either direction */
     }
     if (c->out.u_sat != 0) {
-      c->diag.u_limited++;
+      canfdi_count_inc(&c->diag.u_limited);
     }
     if ((mode == CANFDI_CTRL_FREEZE) || (mode == CANFDI_CTRL_TRACK)) {
       const int32_t u_app = (mode == CANFDI_CTRL_FREEZE) ? c->out.ua_V_q16 : in->u_track_V_q16;
@@ -218,13 +219,13 @@ int32_t canfdi_ctrl_dcm_step(canfdi_ctrl_dcm_t *c, const canfdi_ctrl_dcm_in_t *i
       c->ref_lim_q16 = canfdi_clamp_s32(w, -w_max, w_max);
       u = u_app;
       c->out.u_sat = 0;
-      c->diag.held_steps++;
+      canfdi_count_inc(&c->diag.held_steps);
     }
     c->out.ia_ref_A_q16 = canfdi_pi_out_q16(&c->speed_pi);
     c->out.speed_ref_rad_s_q16 = r;
   }
   c->out.ua_V_q16 = u;
-  c->diag.steps++;
+  canfdi_count_inc(&c->diag.steps);
   if (out != NULL) {
     *out = c->out;
   }

@@ -134,7 +134,10 @@ typedef struct {
   int32_t u_sat;               /* +1/-1: U_A limited high/low this step, else 0 */
 } canfdi_ctrl_dcm_out_t;
 
-/* Monotone counters (the PIs keep their own, canfdi_ctrl_dcm_pi_diag). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. The PIs keep their own
+ * (canfdi_ctrl_dcm_pi_diag). */
 typedef struct {
   uint32_t steps;           /* canfdi_ctrl_dcm_step calls */
   uint32_t rate_limited;    /* steps whose setpoint was rate limited */

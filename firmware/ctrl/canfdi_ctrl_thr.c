@@ -3,6 +3,7 @@
  */
 #include "ctrl/canfdi_ctrl_thr.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 /* num/den as a Q16.16 compile-time constant. */
@@ -147,11 +148,11 @@ static int32_t thr_rate_limit(canfdi_ctrl_thr_t *c, int32_t ref_q16)
   if ((c->dref_max_q16 > 0) && (d > c->dref_max_q16)) {
     c->ref_lim_q16 = canfdi_add_s32_sat(c->ref_lim_q16, c->dref_max_q16);
     dir = 1;
-    c->diag.rate_limited++;
+    canfdi_count_inc(&c->diag.rate_limited);
   } else if ((c->dref_max_q16 > 0) && (d < -c->dref_max_q16)) {
     c->ref_lim_q16 = canfdi_sub_s32_sat(c->ref_lim_q16, c->dref_max_q16);
     dir = -1;
-    c->diag.rate_limited++;
+    canfdi_count_inc(&c->diag.rate_limited);
   } else {
     c->ref_lim_q16 = ref_q16;
   }
@@ -174,7 +175,7 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
   c->out.u_limit_V_q16 = lim;
   if ((ref > cal->angle_max_rad_q16) || (ref < cal->angle_min_rad_q16)) {
     ref = canfdi_clamp_s32(ref, cal->angle_min_rad_q16, cal->angle_max_rad_q16);
-    c->diag.ref_clamped++;
+    canfdi_count_inc(&c->diag.ref_clamped);
   }
   if (!c->ref_primed) {
     c->ref_lim_q16 = th_lim; /* a rate-limited start moves from where it is */
@@ -188,7 +189,7 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
     c->out.angle_ref_rad_q16 = th_lim;
     c->out.u_sat = 0;
     u = 0;
-    c->diag.off_steps++;
+    canfdi_count_inc(&c->diag.off_steps);
   } else {
     const int32_t dir = thr_rate_limit(c, ref);
     const int32_t r = canfdi_add_s32_sat(c->ref_lim_q16, in->excite_rad_q16);
@@ -202,7 +203,7 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
       c->out.u_sat = 0;
     }
     if (c->out.u_sat != 0) {
-      c->diag.u_limited++;
+      canfdi_count_inc(&c->diag.u_limited);
     }
     if ((mode == CANFDI_CTRL_FREEZE) || (mode == CANFDI_CTRL_TRACK)) {
       const int32_t u_app = (mode == CANFDI_CTRL_FREEZE) ? c->out.u_V_q16 : in->u_track_V_q16;
@@ -210,13 +211,13 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
       c->ref_lim_q16 = th_lim;
       u = u_app;
       c->out.u_sat = 0;
-      c->diag.held_steps++;
+      canfdi_count_inc(&c->diag.held_steps);
     }
     c->out.u_ff_V_q16 = u_ff;
     c->out.angle_ref_rad_q16 = r;
   }
   c->out.u_V_q16 = u;
-  c->diag.steps++;
+  canfdi_count_inc(&c->diag.steps);
   if (out != NULL) {
     *out = c->out;
   }

@@ -138,7 +138,10 @@ typedef struct {
   int32_t u_sat;               /* +1/-1: limited high/low this step, else 0 */
 } canfdi_ctrl_thr_out_t;
 
-/* Monotone counters (the PID keeps its own, canfdi_ctrl_thr_pi_diag). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. The PID keeps its own
+ * (canfdi_ctrl_thr_pi_diag). */
 typedef struct {
   uint32_t steps;        /* canfdi_ctrl_thr_step calls */
   uint32_t ref_clamped;  /* setpoints outside [angle_min, angle_max] */

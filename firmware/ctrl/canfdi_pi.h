@@ -114,7 +114,9 @@ typedef struct {
   uint8_t anti_windup; /* CANFDI_PI_AW_* */
 } canfdi_pi_cfg_t;
 
-/* Monotone counters. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;     /* canfdi_pi_step_q16 calls */
   uint32_t sat_hi;    /* steps whose output was limited to out_max */

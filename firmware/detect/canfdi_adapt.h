@@ -74,7 +74,9 @@ typedef struct {
   uint8_t gain_frac_bits; /* 0..62 */
 } canfdi_adapt_cfg_t;
 
-/* Monotone counters, saturating at UINT32_MAX; never cleared after init. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t rate_saturations; /* |du/dt| above INT32_MAX u-units/s */
   uint32_t cap_hits;         /* steps where the threshold was capped at max */

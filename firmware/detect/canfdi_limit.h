@@ -69,7 +69,9 @@ typedef struct {
   canfdi_debounce_cfg_t deb; /* debouncing of the raw symptom */
 } canfdi_limit_cfg_t;
 
-/* Monotone counters, saturating at UINT32_MAX; never cleared after init. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t above_events; /* raw symptom entered ABOVE_MAX */
   uint32_t below_events; /* raw symptom entered BELOW_MIN */

@@ -75,7 +75,9 @@
 /* Input limit in LSB: samples are saturated to +-CANFDI_MEANVAR_X_MAX. */
 #define CANFDI_MEANVAR_X_MAX ((int32_t)1 << 20)
 
-/* Monotone counters (they only grow; init clears them). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t input_saturations; /* samples clipped to +-CANFDI_MEANVAR_X_MAX */
   uint32_t resets;            /* canfdi_meanvar_reset calls */

@@ -3,6 +3,7 @@
  */
 #include "model/canfdi_est_dcm.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 #define ONE_Q16 65536
@@ -85,6 +86,7 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
         (canfdi_svf_init(&e->svf_l, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->arm, &ra) == CANFDI_OK) &&
         (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
       e->cfg = *cfg;
+      e->has_run = false;
       e->diag.steps = 0U;
       e->diag.arm_updates = 0U;
       e->diag.mech_updates = 0U;
@@ -113,7 +115,7 @@ void canfdi_est_dcm_reset(canfdi_est_dcm_t *e, bool keep_theta)
   /* the known load offset is an input, kept across resets */
   e->arm_since_reset = 0U;
   e->mech_since_reset = 0U;
-  e->diag.resets += 1U;
+  canfdi_count_inc(&e->diag.resets);
 }
 
 /* Psi for the mechanical conversion: the estimate once it has converged
@@ -159,12 +161,12 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       phi[2] = canfdi_svf_y_q16(&e->svf_w);
       if (canfdi_rls_update(&e->arm, phi, y)) {
         e->arm_since_reset += (e->arm_since_reset < UINT32_MAX) ? 1U : 0U;
-        e->diag.arm_updates += 1U;
+        canfdi_count_inc(&e->diag.arm_updates);
       }
     }
     /* the mechanical update one step later (same step when decim == 1) */
     if ((e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) && (e->load_hold > 0U)) {
-      e->diag.load_hold_skips += 1U;
+      canfdi_count_inc(&e->diag.load_hold_skips);
     } else if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
       int32_t phi[3];
       phi[0] = canfdi_svf_dy_q16(&e->svf_w);
@@ -179,14 +181,15 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       phi[2] = ONE_Q16;
       if (canfdi_rls_update(&e->mech, phi, y)) {
         e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
-        e->diag.mech_updates += 1U;
+        canfdi_count_inc(&e->diag.mech_updates);
       }
     }
   }
   if (e->load_hold > 0U) {
     e->load_hold = (uint16_t)(e->load_hold - 1U);
   }
-  e->diag.steps += 1U;
+  e->has_run = true;
+  canfdi_count_inc(&e->diag.steps);
 }
 
 int32_t canfdi_est_dcm_ra_q16(const canfdi_est_dcm_t *e)
@@ -223,6 +226,11 @@ int32_t canfdi_est_dcm_mc_q16(const canfdi_est_dcm_t *e)
   return canfdi_add_s32_sat(
       canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 2U, 16U), 16U),
       e->dload_q16);
+}
+
+bool canfdi_est_dcm_has_run(const canfdi_est_dcm_t *e)
+{
+  return e->has_run;
 }
 
 bool canfdi_est_dcm_excited(const canfdi_est_dcm_t *e)

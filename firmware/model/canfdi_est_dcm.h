@@ -101,11 +101,15 @@ typedef struct {
                              * (late load, see canfdi_est_dcm_set_load_offset) */
 } canfdi_est_dcm_cfg_t;
 
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them (canfdi_est_dcm_has_run says whether the
+ * estimator has stepped). */
 typedef struct {
-  uint32_t steps;
+  uint32_t steps;           /* canfdi_est_dcm_step calls */
   uint32_t arm_updates;   /* armature RLS updates applied */
   uint32_t mech_updates;  /* mechanical RLS updates applied */
-  uint32_t resets;
+  uint32_t resets;          /* canfdi_est_dcm_reset calls (init counts as none) */
   uint32_t load_hold_skips; /* mechanical updates skipped: late-load hold */
 } canfdi_est_dcm_diag_t;
 
@@ -117,10 +121,12 @@ typedef struct {
   canfdi_svf_t svf_l;     /* known load offset dM_L */
   canfdi_rls_t arm;
   canfdi_rls_t mech;
-  uint8_t phase;          /* step counter modulo decim */
+  uint8_t phase;          /* step counter modulo decim, 0 .. decim - 1 */
+  bool has_run;           /* stepped at least once since init (reset keeps it) */
   bool started;           /* filters reset on the first sample */
-  uint32_t arm_since_reset;
-  uint32_t mech_since_reset;
+  uint32_t arm_since_reset;  /* armature updates since init/reset (state of
+                              * `converged`), saturating at UINT32_MAX */
+  uint32_t mech_since_reset; /* mechanical updates, likewise */
   int32_t dload_q16;      /* known load offset, Q16.16 N m */
   uint16_t load_hold;     /* steps left of the late-load hold */
   canfdi_est_dcm_diag_t diag;
@@ -169,6 +175,11 @@ int32_t canfdi_est_dcm_psi_q16(const canfdi_est_dcm_t *e);
 int32_t canfdi_est_dcm_j_q24(const canfdi_est_dcm_t *e);
 int32_t canfdi_est_dcm_mf1_q24(const canfdi_est_dcm_t *e);
 int32_t canfdi_est_dcm_mc_q16(const canfdi_est_dcm_t *e);
+
+/* Whether canfdi_est_dcm_step ran at least once since init (a reset does
+ * not clear it): the state a caller needs to tell a restart from the first
+ * start. O(1). */
+bool canfdi_est_dcm_has_run(const canfdi_est_dcm_t *e);
 
 /* Flags (see above): armature gate open at the last update; armature /
  * mechanical estimate converged. */

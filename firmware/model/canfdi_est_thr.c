@@ -3,6 +3,7 @@
  */
 #include "model/canfdi_est_thr.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 #define ONE_Q16 65536
@@ -78,7 +79,7 @@ static void fast_update(canfdi_est_thr_t *e, int32_t i_q16, int32_t a_q16, int32
   e->f_sr_q32 = ew_q32(e->f_sr_q32, (int64_t)s_q16 * r_q16, sh);
   e->f_n = (e->f_n < UINT16_MAX) ? (uint16_t)(e->f_n + 1U) : e->f_n;
   e->f_age = 0U;
-  e->diag.fast_updates += 1U;
+  canfdi_count_inc(&e->diag.fast_updates);
   {
     /* Q32 -> Q24: |c|, |r| <= 16 N m, |s| <= 1: every product < 2^61 */
     const int64_t cc = canfdi_asr64_rnd(e->f_cc_q32, 8U);
@@ -166,6 +167,7 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
         (canfdi_svf_init(&e->svf_s, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->el, &re) == CANFDI_OK) &&
         (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
       e->cfg = *cfg;
+      e->has_run = false;
       e->diag.steps = 0U;
       e->diag.el_updates = 0U;
       e->diag.mech_updates = 0U;
@@ -207,7 +209,7 @@ void canfdi_est_thr_reset(canfdi_est_thr_t *e, bool keep_theta)
   e->f_n = 0U;
   e->f_age = UINT16_MAX;
   e->f_sep = false;
-  e->diag.resets += 1U;
+  canfdi_count_inc(&e->diag.resets);
 }
 
 void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16)
@@ -258,7 +260,7 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
       e->phase = 0U;
     }
     if ((e->phase == 0U) && (e->since_clip < e->cfg.holdoff_steps)) {
-      e->diag.clip_skips += 1U;
+      canfdi_count_inc(&e->diag.clip_skips);
     } else if (e->phase == 0U) {
       int32_t phi[4];
       const int32_t y = canfdi_add_s32_sat(canfdi_svf_y_q16(&e->svf_u),
@@ -269,17 +271,17 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
       phi[3] = ONE_Q16;
       if (canfdi_rls_update(&e->el, phi, y)) {
         e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
-        e->diag.el_updates += 1U;
+        canfdi_count_inc(&e->diag.el_updates);
       }
     }
     if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
       const int32_t a = canfdi_svf_y_q16(&e->svf_a);
       if (e->since_clip < e->cfg.holdoff_steps) {
-        e->diag.clip_skips += 1U;
+        canfdi_count_inc(&e->diag.clip_skips);
       } else if (a <= canfdi_add_s32_sat(e->cfg.limp_home_q16, e->cfg.limp_band_q16)) {
-        e->diag.mech_lh_skips += 1U;
+        canfdi_count_inc(&e->diag.mech_lh_skips);
       } else if (e->moving < e->cfg.holdoff_steps) {
-        e->diag.mech_still_skips += 1U;
+        canfdi_count_inc(&e->diag.mech_still_skips);
       } else {
         int32_t phi[5];
         fast_update(e, canfdi_svf_y_q16(&e->svf_i), a, canfdi_svf_dy_q16(&e->svf_a),
@@ -291,12 +293,13 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
         phi[4] = canfdi_svf_y_q16(&e->svf_s);
         if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
           e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
-          e->diag.mech_updates += 1U;
+          canfdi_count_inc(&e->diag.mech_updates);
         }
       }
     }
   }
-  e->diag.steps += 1U;
+  e->has_run = true;
+  canfdi_count_inc(&e->diag.steps);
 }
 
 int32_t canfdi_est_thr_r_q16(const canfdi_est_thr_t *e)
@@ -365,6 +368,11 @@ int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e)
 bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e)
 {
   return e->f_sep && (e->f_n >= e->cfg.fast_min_updates) && (e->f_age <= e->cfg.fast_stale_steps);
+}
+
+bool canfdi_est_thr_has_run(const canfdi_est_thr_t *e)
+{
+  return e->has_run;
 }
 
 bool canfdi_est_thr_excited(const canfdi_est_thr_t *e)

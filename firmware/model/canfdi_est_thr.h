@@ -156,14 +156,18 @@ typedef struct {
   uint16_t fast_stale_steps; /* valid only within this many steps of an update */
 } canfdi_est_thr_cfg_t;
 
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them (canfdi_est_thr_has_run says whether the
+ * estimator has stepped). */
 typedef struct {
-  uint32_t steps;
+  uint32_t steps;           /* canfdi_est_thr_step calls */
   uint32_t el_updates;
   uint32_t mech_updates;
   uint32_t mech_lh_skips;  /* mechanical updates skipped near limp-home */
   uint32_t mech_still_skips; /* mechanical updates skipped: not moving steadily */
   uint32_t clip_skips;     /* updates skipped after a clipped current sample */
-  uint32_t resets;
+  uint32_t resets;          /* canfdi_est_thr_reset calls (init counts as none) */
   uint32_t fast_updates;   /* updates of the fast structured test */
 } canfdi_est_thr_diag_t;
 
@@ -175,13 +179,17 @@ typedef struct {
   canfdi_svf_t svf_s;
   canfdi_rls_t el;
   canfdi_rls_t mech;
-  uint8_t phase;
+  uint8_t phase;           /* step counter modulo decim, 0 .. decim - 1 */
+  bool has_run;           /* stepped at least once since init (reset keeps it) */
   bool started;
-  uint16_t since_clip;     /* steps since the last clipped current sample */
-  uint16_t moving;         /* steps moving in one direction beyond the band */
+  uint16_t since_clip;     /* steps since the last clipped current sample,
+                            * saturating at UINT16_MAX */
+  uint16_t moving;         /* steps moving in one direction beyond the band,
+                            * saturating at UINT16_MAX */
   int8_t last_dir;
-  uint32_t el_since_reset;
-  uint32_t mech_since_reset;
+  uint32_t el_since_reset;   /* electrical updates since init/reset (state of
+                              * `converged`), saturating at UINT32_MAX */
+  uint32_t mech_since_reset; /* mechanical updates, likewise */
   /* fast structured test: EW means, Q32 (c, s, r of the header) */
   int64_t f_cc_q32;
   int64_t f_cs_q32;
@@ -190,8 +198,9 @@ typedef struct {
   int64_t f_sr_q32;
   int32_t f_spring_dev_q16; /* last solution */
   int32_t f_fric_dev_q16;
-  uint16_t f_n;             /* updates since reset (saturating) */
-  uint16_t f_age;           /* steps since the last update (saturating) */
+  uint16_t f_n;             /* updates since reset, saturating at UINT16_MAX */
+  uint16_t f_age;           /* steps since the last update, saturating at
+                             * UINT16_MAX (UINT16_MAX after reset: none yet) */
   bool f_sep;               /* last solution separable */
   canfdi_est_thr_diag_t diag;
 } canfdi_est_thr_t;
@@ -237,6 +246,9 @@ int32_t canfdi_est_thr_friction_q16(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_fast_spring_dev_q16(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e);
 bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e);
+
+/* As canfdi_est_dcm_has_run. O(1). */
+bool canfdi_est_thr_has_run(const canfdi_est_thr_t *e);
 
 bool canfdi_est_thr_excited(const canfdi_est_thr_t *e);
 bool canfdi_est_thr_el_converged(const canfdi_est_thr_t *e);

@@ -4,6 +4,8 @@
  */
 #include "model/canfdi_parity_dcm.h"
 
+#include "core/canfdi_count.h"
+
 /* Fraction bits of the residual accumulator (Q23.40 in int64_t). */
 #define PDCM_ACC_FRAC 40U
 /* Fraction bits of the parameters. */
@@ -138,7 +140,7 @@ static int32_t pdcm_acc_out(canfdi_parity_dcm_t *p, int64_t acc)
   const int64_t r = canfdi_asr64_rnd(acc, PDCM_ACC_FRAC - 16U);
   const int32_t y = canfdi_sat_s64_to_s32(r);
   if ((int64_t)y != r) {
-    p->diag.res_saturations += (p->diag.res_saturations < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.res_saturations);
   }
   return y;
 }
@@ -322,7 +324,7 @@ void canfdi_parity_dcm_reset(canfdi_parity_dcm_t *p)
     p->out.exceed = 0U;
     p->out.ra_hat_ohm_q24 = p->ra_hat_ohm_q24;
     p->out.ra_at_limit = false;
-    p->diag.resets += (p->diag.resets < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.resets);
   }
 }
 
@@ -368,7 +370,7 @@ static void pdcm_ra_block(canfdi_parity_dcm_t *p)
   const int64_t gate = (int64_t)c->ra_gate_q16 * (int64_t)c->ra_block_steps;
   const bool bad = (p->blk_rn > gate) || (p->blk_rn < -gate);
   if ((bad && !learning) || p->blk_invalid || (p->blk_ii < ii_min)) {
-    p->diag.ra_blocks_rejected += (p->diag.ra_blocks_rejected < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.ra_blocks_rejected);
   } else {
     /* dR in Q24: both sums are Q32 (Q16.16 x Q16.16). */
     const canfdi_parity_dcm_coef_t q = pdcm_coef_ratio(p->blk_ri, 32U, p->blk_ii, 32U);
@@ -404,13 +406,13 @@ static void pdcm_ra_block(canfdi_parity_dcm_t *p)
     }
     ra = canfdi_clamp_s32(ra, c->ra_min_ohm_q24, c->ra_max_ohm_q24);
     if (hit) {
-      p->diag.ra_limit_hits += (p->diag.ra_limit_hits < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&p->diag.ra_limit_hits);
     }
     if (ra != p->ra_hat_ohm_q24) {
       p->ra_hat_ohm_q24 = ra;
       pdcm_coef_ra(p);
     }
-    p->diag.ra_updates += (p->diag.ra_updates < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.ra_updates);
   }
   pdcm_clear_block(p);
 }
@@ -487,7 +489,7 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
     /* Late load: a change of the known load holds r2..r4 (header). */
     if (p->primed && (in->load_Nm_q16 != p->load_prev_q16) && (c->load_hold_steps != 0U)) {
       p->load_hold = c->load_hold_steps;
-      p->diag.load_holds = (p->diag.load_holds < UINT32_MAX) ? (p->diag.load_holds + 1U) : UINT32_MAX;
+      canfdi_count_inc(&p->diag.load_holds);
     }
     p->load_prev_q16 = in->load_Nm_q16;
     if (!p->primed) {
@@ -658,7 +660,7 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
       }
     }
     p->out.ra_hat_ohm_q24 = p->ra_hat_ohm_q24;
-    p->diag.steps += (p->diag.steps < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.steps);
     out = &p->out;
   }
   return out;

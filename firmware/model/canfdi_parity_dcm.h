@@ -384,7 +384,9 @@ typedef struct {
   bool ra_at_limit;        /* the last R_A update hit ra_min/ra_max */
 } canfdi_parity_dcm_out_t;
 
-/* Monotone counters (saturating at UINT32_MAX). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;
   uint32_t resets;             /* canfdi_parity_dcm_reset calls (init not counted) */
@@ -414,10 +416,12 @@ typedef struct {
   int64_t bias_q32[3];        /* load means of r2..r4 */
   int32_t i_prev_q16;
   int32_t w_prev_q16;
-  uint16_t blk_n;
-  uint16_t settle;
-  uint16_t w_ok;
-  uint16_t ra_learn_left;
+  uint16_t blk_n;             /* samples in the R_A block, 0 .. ra_block_steps - 1 */
+  uint16_t settle;            /* steps left before the residuals are valid,
+                               * settle_steps .. 0 */
+  uint16_t w_ok;              /* consecutive steps with |w_f| >= w_band,
+                               * saturating at UINT16_MAX */
+  uint16_t ra_learn_left;     /* fast-learning blocks left, ra_learn_blocks .. 0 */
   uint16_t load_hold;         /* steps left of the late-load hold */
   int32_t load_prev_q16;      /* known load of the last step */
   bool blk_invalid;

@@ -4,6 +4,8 @@
  */
 #include "model/canfdi_parity_thr.h"
 
+#include "core/canfdi_count.h"
+
 #define PTHR_ONE_Q16 ((int32_t)65536)
 #define PTHR_Q24(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 24))
 #define PTHR_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 16))
@@ -263,7 +265,7 @@ void canfdi_parity_thr_reset(canfdi_parity_thr_t *p)
     p->out.omega_hat_rad_s_q16 = 0;
     p->out.theta1_rad_q16 = 0;
     p->out.theta2_rad_q16 = 0;
-    p->diag.resets += (p->diag.resets < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.resets);
   }
 }
 
@@ -360,7 +362,7 @@ static uint8_t pthr_source(canfdi_parity_thr_t *p, bool ok1, bool ok2, int32_t c
     p->in_band_n = (p->in_band_n < UINT16_MAX) ? (uint16_t)(p->in_band_n + 1U) : p->in_band_n;
     if ((src != CANFDI_PARITY_THR_SRC_MEAN) && (p->in_band_n >= c->release_steps)) {
       src = CANFDI_PARITY_THR_SRC_MEAN;
-      p->diag.releases += (p->diag.releases < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&p->diag.releases);
     }
     p->cand_n = 0U;
   } else {
@@ -368,7 +370,7 @@ static uint8_t pthr_source(canfdi_parity_thr_t *p, bool ok1, bool ok2, int32_t c
     if (src == CANFDI_PARITY_THR_SRC_MEAN) {
       src = CANFDI_PARITY_THR_SRC_NONE; /* coast on the model */
       p->cand_n = 0U;
-      p->diag.coast_entries += (p->diag.coast_entries < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&p->diag.coast_entries);
     }
     if (src == CANFDI_PARITY_THR_SRC_NONE) {
       /* Trust the sensor the model agrees with, once the other clearly
@@ -394,7 +396,7 @@ static uint8_t pthr_source(canfdi_parity_thr_t *p, bool ok1, bool ok2, int32_t c
       p->cand = cand;
       if ((cand != CANFDI_PARITY_THR_SRC_NONE) && (p->cand_n >= c->select_steps)) {
         src = cand;
-        p->diag.selections += (p->diag.selections < UINT32_MAX) ? 1U : 0U;
+        canfdi_count_inc(&p->diag.selections);
       }
     }
   }
@@ -592,7 +594,7 @@ const canfdi_parity_thr_out_t *canfdi_parity_thr_step(canfdi_parity_thr_t *p,
     acc = canfdi_sub_s64_sat(acc, (int64_t)c->k_Nm_A_q24 * canfdi_svf_dy_q16(&p->svf_th));
     r[CANFDI_PARITY_THR_ARM] = canfdi_sat_s64_to_s32(canfdi_asr64_rnd(acc, 24U));
     if (clip) {
-      p->diag.current_clips += (p->diag.current_clips < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&p->diag.current_clips);
     }
     if (in->enabled && !clip && (ok1 || ok2)) {
       p->arm_ok = (p->arm_ok < UINT16_MAX) ? (uint16_t)(p->arm_ok + 1U) : p->arm_ok;
@@ -635,7 +637,7 @@ const canfdi_parity_thr_out_t *canfdi_parity_thr_step(canfdi_parity_thr_t *p,
     p->th2_prev_q16 = th2;
     p->ok_prev = ok;
     p->en_prev = in->enabled;
-    p->diag.steps += (p->diag.steps < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.steps);
     out = &p->out;
   }
   return out;

@@ -303,6 +303,9 @@ typedef struct {
   int32_t theta2_rad_q16;
 } canfdi_parity_thr_out_t;
 
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;
   uint32_t resets;        /* canfdi_parity_thr_reset calls (init not counted) */
@@ -338,10 +341,14 @@ typedef struct {
   int64_t th_arm_q32;      /* angle for dtheta/dt (see ARM), Q32 */
   int64_t th_arm_prev_q32;
   int64_t inc_prev_q32;
-  uint16_t settle;
-  uint16_t arm_ok;
-  uint16_t cand_n;
-  uint16_t in_band_n;
+  uint16_t settle;        /* steps left before the residuals are valid,
+                           * settle_steps .. 0 */
+  uint16_t arm_ok;        /* consecutive steps ARM could be formed,
+                           * saturating at UINT16_MAX */
+  uint16_t cand_n;        /* consecutive steps `cand` was the candidate,
+                           * saturating at UINT16_MAX */
+  uint16_t in_band_n;     /* consecutive steps CORR was inside its band,
+                           * saturating at UINT16_MAX */
   uint8_t ok_prev;
   uint8_t src;
   uint8_t cand;

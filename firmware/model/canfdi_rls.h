@@ -119,7 +119,9 @@ typedef struct {
   int32_t theta0_q16[CANFDI_CFG_RLS_MAX_PARAMS]; /* initial physical theta */
 } canfdi_rls_cfg_t;
 
-/* Monotone counters. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t updates;     /* updates applied */
   uint32_t skipped;     /* updates skipped by the excitation gate */

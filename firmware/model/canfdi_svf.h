@@ -91,7 +91,9 @@ typedef struct {
   int32_t omega_c_rad_s; /* corner frequency wc, integer rad/s, 1..2000 at 1 ms */
 } canfdi_svf_cfg_t;
 
-/* Monotone counters. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;           /* canfdi_svf_step calls */
   uint32_t resets;          /* canfdi_svf_reset calls (init counts as none) */

@@ -369,6 +369,7 @@ static void guard_est_dcm(void)
   sink32(canfdi_est_dcm_j_q24(&est));
   sink32(canfdi_est_dcm_mf1_q24(&est));
   sink32(canfdi_est_dcm_mc_q16(&est));
+  sink32(canfdi_est_dcm_has_run(&est) ? 1 : 0);
   sink32(canfdi_est_dcm_excited(&est) ? 1 : 0);
   sink32(canfdi_est_dcm_arm_converged(&est) ? 1 : 0);
   sink32(canfdi_est_dcm_mech_converged(&est) ? 1 : 0);
@@ -400,6 +401,7 @@ static void guard_est_thr(void)
   sink32(canfdi_est_thr_fast_spring_dev_q16(&est));
   sink32(canfdi_est_thr_fast_friction_dev_q16(&est));
   sink32(canfdi_est_thr_fast_valid(&est) ? 1 : 0);
+  sink32(canfdi_est_thr_has_run(&est) ? 1 : 0);
   sink32(canfdi_est_thr_excited(&est) ? 1 : 0);
   sink32(canfdi_est_thr_el_converged(&est) ? 1 : 0);
   sink32(canfdi_est_thr_mech_converged(&est) ? 1 : 0);
