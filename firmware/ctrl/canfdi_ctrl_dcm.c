@@ -5,25 +5,23 @@
 
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-/* num/den as a Q16.16 compile-time constant. */
-#define DCM_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_SAT_((num), (den), 16, INT32_MIN, INT32_MAX))
+#include "core/canfdi_qconst.h"
 
 void canfdi_ctrl_dcm_cal_default(canfdi_ctrl_dcm_cal_t *cal)
 {
-  cal->ra_ohm_q16 = DCM_Q16(152, 100);
-  cal->psi_Vs_q16 = DCM_Q16(33, 100);
+  cal->ra_ohm_q16 = CANFDI_Q16_MILLI(1520);
+  cal->psi_Vs_q16 = CANFDI_Q16_MILLI(330);
   cal->j_kgm2_q31 = CANFDI_Q31_RATIO(192, 100000);
   /* speed PI: kp = J w_cw / Psi = 1.92e-3 * 100 / 0.33, ki = kp w_cw / 4 */
-  cal->speed_kp_A_s_rad_q16 = DCM_Q16(192 * 100, 33000);
-  cal->speed_ki_A_rad_q16 = DCM_Q16(192 * 100 * 25, 33000);
+  cal->speed_kp_A_s_rad_q16 = CANFDI_Q16(192 * 100, 33000);
+  cal->speed_ki_A_rad_q16 = CANFDI_Q16(192 * 100 * 25, 33000);
   /* current PI: kp = L w_ci = 6.82e-3 * 500, ki = R w_ci = 1.52 * 500 */
-  cal->cur_kp_V_A_q16 = DCM_Q16(682 * 5, 1000);
-  cal->cur_ki_V_As_q16 = DCM_Q16(152 * 5, 1);
-  cal->ia_max_A_q16 = DCM_Q16(20, 1);
-  cal->u_max_V_q16 = DCM_Q16(48, 1);
-  cal->speed_max_rad_s_q16 = DCM_Q16(350, 1);
-  cal->accel_max_rad_s2_q16 = DCM_Q16(2000, 1);
+  cal->cur_kp_V_A_q16 = CANFDI_Q16(682 * 5, 1000);
+  cal->cur_ki_V_As_q16 = CANFDI_Q16(152 * 5, 1);
+  cal->ia_max_A_q16 = CANFDI_Q16(20, 1);
+  cal->u_max_V_q16 = CANFDI_Q16(48, 1);
+  cal->speed_max_rad_s_q16 = CANFDI_Q16(350, 1);
+  cal->accel_max_rad_s2_q16 = CANFDI_Q16(2000, 1);
   cal->current_loop = true;
   cal->anti_windup = CANFDI_PI_AW_CLAMP;
 }
@@ -79,7 +77,7 @@ int32_t canfdi_ctrl_dcm_init(canfdi_ctrl_dcm_t *c, const canfdi_ctrl_dcm_cal_t *
     c->speed_pi = spi;
     c->cur_pi = cpi;
     c->dref_max_q16 = canfdi_sat_s64_to_s32(dref);
-    c->inv_r_q16 = canfdi_div_s32_qn(65536, cal->ra_ohm_q16, 16U);
+    c->inv_r_q16 = canfdi_div_s32_qn(CANFDI_Q16_ONE, cal->ra_ohm_q16, 16U);
     c->i_acc_q16 = canfdi_sat_s64_to_s32(i_acc);
     c->ref_lim_q16 = 0;
     c->out.ua_V_q16 = 0;

@@ -5,35 +5,30 @@
 
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-/* num/den as a Q16.16 compile-time constant. */
-#define THR_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_SAT_((num), (den), 16, INT32_MIN, INT32_MAX))
-/* num/den degrees in rad, Q16.16, with pi ~ 355/113 (relative error 8e-8,
- * far below the Q16.16 LSB for angles up to 180 deg). */
-#define THR_DEG_Q16(num, den) THR_Q16((int64_t)(num) * 355, (int64_t)(den) * 113 * 180)
+#include "core/canfdi_qconst.h"
 
 void canfdi_ctrl_thr_cal_default(canfdi_ctrl_thr_cal_t *cal)
 {
-  cal->r_ohm_q16 = THR_Q16(15, 10);
-  cal->k_Nm_A_q16 = THR_Q16(383, 1000);
-  cal->spring_Nm_rad_q16 = THR_Q16(87, 1000);
-  cal->pretension_Nm_q16 = THR_Q16(396, 1000);
-  cal->friction_Nm_q16 = THR_Q16(284, 1000);
-  cal->b_Nms_q16 = THR_Q16(88, 10000);
-  cal->limp_home_rad_q16 = THR_DEG_Q16(65, 10);
-  cal->pretension_band_rad_q16 = THR_DEG_Q16(1, 10);
-  cal->friction_deadband_rad_q16 = THR_DEG_Q16(2, 10);
+  cal->r_ohm_q16 = CANFDI_Q16_MILLI(1500);
+  cal->k_Nm_A_q16 = CANFDI_Q16_MILLI(383);
+  cal->spring_Nm_rad_q16 = CANFDI_Q16_MILLI(87);
+  cal->pretension_Nm_q16 = CANFDI_Q16_MILLI(396);
+  cal->friction_Nm_q16 = CANFDI_Q16_MILLI(284);
+  cal->b_Nms_q16 = CANFDI_Q16(88, 10000);
+  cal->limp_home_rad_q16 = CANFDI_Q16_DEG(65, 10);
+  cal->pretension_band_rad_q16 = CANFDI_Q16_DEG(1, 10);
+  cal->friction_deadband_rad_q16 = CANFDI_Q16_DEG(2, 10);
   cal->spring_comp = true;
   cal->friction_comp = true;
   cal->velocity_ff = true;
-  cal->kp_V_rad_q16 = THR_Q16(356, 1);
-  cal->ki_V_rad_s_q16 = THR_Q16(3000, 1);
-  cal->kd_V_s_rad_q16 = THR_Q16(255, 100);
+  cal->kp_V_rad_q16 = CANFDI_Q16(356, 1);
+  cal->ki_V_rad_s_q16 = CANFDI_Q16(3000, 1);
+  cal->kd_V_s_rad_q16 = CANFDI_Q16_MILLI(2550);
   cal->kd_tau_us = 2000U;
-  cal->i_band_rad_q16 = THR_DEG_Q16(1, 1);
-  cal->angle_min_rad_q16 = THR_DEG_Q16(5, 10);
-  cal->angle_max_rad_q16 = THR_DEG_Q16(88, 1);
-  cal->u_max_V_q16 = THR_Q16(16, 1);
+  cal->i_band_rad_q16 = CANFDI_Q16_DEG(1, 1);
+  cal->angle_min_rad_q16 = CANFDI_Q16_DEG(5, 10);
+  cal->angle_max_rad_q16 = CANFDI_Q16_DEG(88, 1);
+  cal->u_max_V_q16 = CANFDI_Q16(16, 1);
   cal->rate_max_rad_s_q16 = 0;
 }
 

@@ -5,8 +5,7 @@
 #include "detect/canfdi_cusum.h"
 
 #include "core/canfdi_count.h"
-
-#define CUSUM_ONE_Q16 ((int64_t)1 << 16)
+#include "core/canfdi_qconst.h"
 
 /* Bound on |S| from the header's overflow argument: H <= 2^46 before a step,
  * one update < 2^49. Checked as an invariant on every step. */
@@ -105,7 +104,7 @@ uint32_t canfdi_cusum_step(canfdi_cusum_t *s, int32_t x)
     canfdi_count_inc(&s->diag.latched_samples);
   } else {
     /* e*2^16 by multiplication: exact (|e| < 2^32) and defined for e < 0. */
-    const int64_t e_q16 = ((int64_t)x - (int64_t)s->mu0) * CUSUM_ONE_Q16;
+    const int64_t e_q16 = ((int64_t)x - (int64_t)s->mu0) * (int64_t)CANFDI_Q16_ONE;
     accumulate(&s->s_hi_q16, &s->n_hi, e_q16 - s->k_lsb_q16);
     accumulate(&s->s_lo_q16, &s->n_lo, -e_q16 - s->k_lsb_q16);
     CANFDI_ASSERT((s->s_hi_q16 < CUSUM_S_BOUND) && (s->s_lo_q16 < CUSUM_S_BOUND));

@@ -6,8 +6,9 @@
 
 #include "core/canfdi_count.h"
 
-/* x * 2^32 and x * 2^10 by multiplication: exact in int64_t for |x| <= 2^21,
- * and unlike a left shift defined for negative x. */
+/* x * 2^32 by multiplication: exact in int64_t for |x| <= 2^21, and unlike
+ * a left shift defined for negative x. A 64-bit scale factor of this module
+ * alone: core/canfdi_qconst.h holds the int32_t Q16.16 and Q8.24 constants. */
 #define MEANVAR_ONE_Q32 ((int64_t)1 << 32)
 #define MEANVAR_D_FRAC 10U  /* fraction bits of d = x - mean */
 #define MEANVAR_V_FRAC 20U  /* fraction bits of the variance, 2 * D_FRAC */

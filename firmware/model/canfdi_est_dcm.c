@@ -5,8 +5,7 @@
 
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-#define ONE_Q16 65536
+#include "core/canfdi_qconst.h"
 
 /* T / 2 in Q31 (the half-sample correction of the ZOH voltage) */
 #define HALF_T_Q31 CANFDI_Q31_RATIO(CANFDI_CFG_STEP_US, 2000000)
@@ -18,17 +17,17 @@ void canfdi_est_dcm_default_cfg(canfdi_est_dcm_cfg_t *cfg)
   cfg->svf.omega_c_rad_s = 200;
   cfg->decim = 5U;
   cfg->forget_q31 = CANFDI_Q31_RATIO(1, 100);
-  cfg->p0_q16 = 100 * ONE_Q16;
-  cfg->trace_max_q16 = 1000 * ONE_Q16;
-  cfg->excite_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 1000, 16);
+  cfg->p0_q16 = 100 * CANFDI_Q16_ONE;
+  cfg->trace_max_q16 = 1000 * CANFDI_Q16_ONE;
+  cfg->excite_min_q16 = CANFDI_Q16_MILLI(1);
   cfg->excite_shift = 6U;
   cfg->conv_updates = 400U;
-  cfg->ra_nom_q16 = (int32_t)CANFDI_QN_RATIO_(152, 100, 16);
-  cfg->la_nom_q24 = (int32_t)CANFDI_QN_RATIO_(682, 100000, 24);
-  cfg->psi_nom_q16 = (int32_t)CANFDI_QN_RATIO_(33, 100, 16);
-  cfg->j_nom_q24 = (int32_t)CANFDI_QN_RATIO_(192, 100000, 24);
-  cfg->mf1_nom_q24 = (int32_t)CANFDI_QN_RATIO_(36, 100000, 24);
-  cfg->mc_nom_q16 = (int32_t)CANFDI_QN_RATIO_(131, 100, 16);
+  cfg->ra_nom_q16 = CANFDI_Q16_MILLI(1520);
+  cfg->la_nom_q24 = CANFDI_Q24(682, 100000);
+  cfg->psi_nom_q16 = CANFDI_Q16_MILLI(330);
+  cfg->j_nom_q24 = CANFDI_Q24(192, 100000);
+  cfg->mf1_nom_q24 = CANFDI_Q24(36, 100000);
+  cfg->mc_nom_q16 = CANFDI_Q16_MILLI(1310);
   cfg->load_hold_steps = 0U;
 }
 
@@ -178,7 +177,7 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       const int32_t y = canfdi_sub_s32_sat(
           canfdi_svf_y_q16(&e->svf_i),
           canfdi_div_s32_qn(canfdi_svf_y_q16(&e->svf_l), psi_for_mech_q16(e), 16U));
-      phi[2] = ONE_Q16;
+      phi[2] = CANFDI_Q16_ONE;
       if (canfdi_rls_update(&e->mech, phi, y)) {
         e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
         canfdi_count_inc(&e->diag.mech_updates);

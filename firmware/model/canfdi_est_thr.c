@@ -5,14 +5,11 @@
 
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-#define ONE_Q16 65536
+#include "core/canfdi_qconst.h"
 
 /* torque bound of the fast test, N m (4x the valve's largest, K x 10 A) */
-#define FAST_TQ_MAX_Q16 (16 * ONE_Q16)
+#define FAST_TQ_MAX_Q16 (16 * CANFDI_Q16_ONE)
 #define HALF_T_Q31 CANFDI_Q31_RATIO(CANFDI_CFG_STEP_US, 2000000)
-/* pi / 180 for the degree-valued defaults */
-#define DEG_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_((int64_t)(num) * 314159265, (int64_t)(den) * 18000000000LL, 16))
 
 void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
 {
@@ -22,28 +19,28 @@ void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
   cfg->decim = 2U;
   cfg->forget_q31 = CANFDI_Q31_RATIO(5, 1000);
   cfg->mech_forget_q31 = CANFDI_Q31_RATIO(5, 10000);
-  cfg->p0_q16 = 100 * ONE_Q16;
-  cfg->trace_max_q16 = 1000 * ONE_Q16;
-  cfg->excite_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 1000, 16);
+  cfg->p0_q16 = 100 * CANFDI_Q16_ONE;
+  cfg->trace_max_q16 = 1000 * CANFDI_Q16_ONE;
+  cfg->excite_min_q16 = CANFDI_Q16_MILLI(1);
   cfg->excite_shift = 6U;
   cfg->conv_updates = 1000U;
-  cfg->sign_band_q16 = (int32_t)CANFDI_QN_RATIO_(3, 10, 16);
-  cfg->limp_band_q16 = DEG_Q16(2, 1);
-  cfg->i_limit_q16 = (int32_t)CANFDI_QN_RATIO_(99, 10, 16);
+  cfg->sign_band_q16 = CANFDI_Q16_MILLI(300);
+  cfg->limp_band_q16 = CANFDI_Q16_DEG(2, 1);
+  cfg->i_limit_q16 = CANFDI_Q16_MILLI(9900);
   cfg->holdoff_steps = 40U;
-  cfg->r_nom_q16 = (int32_t)CANFDI_QN_RATIO_(15, 10, 16);
-  cfg->l_nom_q24 = (int32_t)CANFDI_QN_RATIO_(15, 10000, 24);
-  cfg->k_nom_q16 = (int32_t)CANFDI_QN_RATIO_(383, 1000, 16);
+  cfg->r_nom_q16 = CANFDI_Q16_MILLI(1500);
+  cfg->l_nom_q24 = CANFDI_Q24(15, 10000);
+  cfg->k_nom_q16 = CANFDI_Q16_MILLI(383);
   cfg->u0_nom_q16 = 0;
-  cfg->j_nom_q24 = (int32_t)CANFDI_QN_RATIO_(21, 10000, 24);
-  cfg->b_nom_q24 = (int32_t)CANFDI_QN_RATIO_(88, 10000, 24);
-  cfg->spring_nom_q24 = (int32_t)CANFDI_QN_RATIO_(87, 1000, 24);
-  cfg->pretension_nom_q16 = (int32_t)CANFDI_QN_RATIO_(396, 1000, 16);
-  cfg->friction_nom_q16 = (int32_t)CANFDI_QN_RATIO_(284, 1000, 16);
-  cfg->limp_home_q16 = DEG_Q16(65, 10);
+  cfg->j_nom_q24 = CANFDI_Q24(21, 10000);
+  cfg->b_nom_q24 = CANFDI_Q24(88, 10000);
+  cfg->spring_nom_q24 = CANFDI_Q24(87, 1000);
+  cfg->pretension_nom_q16 = CANFDI_Q16_MILLI(396);
+  cfg->friction_nom_q16 = CANFDI_Q16_MILLI(284);
+  cfg->limp_home_q16 = CANFDI_Q16_DEG(65, 10);
   cfg->fast_shift = 6U;
   cfg->fast_min_updates = 100U;
-  cfg->fast_sep_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 4, 16);
+  cfg->fast_sep_min_q16 = CANFDI_Q16_MILLI(250);
   cfg->fast_stale_steps = 500U;
 }
 
@@ -142,7 +139,7 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
   if ((e != NULL) && (cfg != NULL) && (cfg->svf.order == 3U) && (cfg->decim >= 1U) && (cfg->decim <= 100U) &&
       (cfg->k_nom_q16 > 0) && (cfg->sign_band_q16 >= 0) && (cfg->limp_band_q16 >= 0) && (cfg->i_limit_q16 >= 0) &&
       (cfg->holdoff_steps >= 1U) && (cfg->holdoff_steps <= 1000U) && (cfg->fast_shift >= 1U) &&
-      (cfg->fast_shift <= 12U) && (cfg->fast_sep_min_q16 >= 0) && (cfg->fast_sep_min_q16 <= ONE_Q16)) {
+      (cfg->fast_shift <= 12U) && (cfg->fast_sep_min_q16 >= 0) && (cfg->fast_sep_min_q16 <= CANFDI_Q16_ONE)) {
     canfdi_rls_cfg_t re;
     canfdi_rls_cfg_t rm;
     rls_cfg_common(&re, cfg, 4U);
@@ -226,9 +223,9 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
     const int32_t v = canfdi_svf_dy_q16(&e->svf_a);
     int32_t s = 0;
     if (v > e->cfg.sign_band_q16) {
-      s = ONE_Q16;
+      s = CANFDI_Q16_ONE;
     } else if (v < -e->cfg.sign_band_q16) {
-      s = -ONE_Q16;
+      s = -CANFDI_Q16_ONE;
     } else {
       /* inside the dead band: unknown, 0 */
     }
@@ -268,7 +265,7 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
       phi[0] = canfdi_svf_y_q16(&e->svf_i);
       phi[1] = canfdi_svf_dy_q16(&e->svf_i);
       phi[2] = canfdi_svf_dy_q16(&e->svf_a);
-      phi[3] = ONE_Q16;
+      phi[3] = CANFDI_Q16_ONE;
       if (canfdi_rls_update(&e->el, phi, y)) {
         e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
         canfdi_count_inc(&e->diag.el_updates);
@@ -289,7 +286,7 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
         phi[0] = canfdi_svf_d2y_q16(&e->svf_a);
         phi[1] = canfdi_svf_dy_q16(&e->svf_a);
         phi[2] = a;
-        phi[3] = ONE_Q16;
+        phi[3] = CANFDI_Q16_ONE;
         phi[4] = canfdi_svf_y_q16(&e->svf_s);
         if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
           e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;

@@ -5,6 +5,7 @@
 #include "model/canfdi_parity_dcm.h"
 
 #include "core/canfdi_count.h"
+#include "core/canfdi_qconst.h"
 
 /* Fraction bits of the residual accumulator (Q23.40 in int64_t). */
 #define PDCM_ACC_FRAC 40U
@@ -18,9 +19,6 @@
 /* |r1| used in the R_A least-squares sums: clamped to 64 V (2^22 in Q16.16)
  * so that N * |r1 * I| < 2^63 for every allowed block length. */
 #define PDCM_R1_SUM_CLAMP ((int32_t)1 << 22)
-/* Parameter domain (Q8.24 raw values). */
-#define PDCM_Q24(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 24))
-#define PDCM_ONE_Q16 ((int32_t)65536)
 
 /* ------------------------------------------------------------------------ */
 /* Coefficients: value = m * 2^-f with |m| in [2^29, 2^31)                   */
@@ -176,25 +174,25 @@ int32_t canfdi_parity_dcm_cfg_check(const canfdi_parity_dcm_cfg_t *cfg)
   unsigned k;
   if (cfg == NULL) {
     out = -CANFDI_EINVAL;
-  } else if (!pdcm_in(cfg->ra_ohm_q24, PDCM_Q24(1, 1000), PDCM_Q24(100, 1)) ||
-             !pdcm_in(cfg->la_H_q24, PDCM_Q24(1, 1000000), PDCM_Q24(1, 1)) ||
-             !pdcm_in(cfg->psi_Vs_q24, PDCM_Q24(1, 100), PDCM_Q24(10, 1)) ||
-             !pdcm_in(cfg->j_kgm2_q24, PDCM_Q24(1, 1000000), PDCM_Q24(10, 1)) ||
-             !pdcm_in(cfg->mf1_Nms_q24, 0, PDCM_Q24(1, 1)) ||
-             !pdcm_in(cfg->mf0_Nm_q24, 0, PDCM_Q24(10, 1)) ||
+  } else if (!pdcm_in(cfg->ra_ohm_q24, CANFDI_Q24(1, 1000), CANFDI_Q24(100, 1)) ||
+             !pdcm_in(cfg->la_H_q24, CANFDI_Q24(1, 1000000), CANFDI_Q24(1, 1)) ||
+             !pdcm_in(cfg->psi_Vs_q24, CANFDI_Q24(1, 100), CANFDI_Q24(10, 1)) ||
+             !pdcm_in(cfg->j_kgm2_q24, CANFDI_Q24(1, 1000000), CANFDI_Q24(10, 1)) ||
+             !pdcm_in(cfg->mf1_Nms_q24, 0, CANFDI_Q24(1, 1)) ||
+             !pdcm_in(cfg->mf0_Nm_q24, 0, CANFDI_Q24(10, 1)) ||
              !pdcm_in(cfg->omega_c_rad_s, 20, 1000) ||
-             !pdcm_in(cfg->w_band_rad_s_q16, 1, 100 * PDCM_ONE_Q16)) {
+             !pdcm_in(cfg->w_band_rad_s_q16, 1, 100 * CANFDI_Q16_ONE)) {
     out = -CANFDI_EINVAL;
   } else if ((cfg->ra_track != 0U) &&
              ((cfg->ra_block_steps < 10U) || (cfg->ra_block_steps > 1000U) ||
               ((uint64_t)cfg->ra_tau_s * 1000000U <
                (uint64_t)cfg->ra_block_steps * (uint64_t)CANFDI_CFG_STEP_US) ||
               (cfg->ra_tau_s > CANFDI_PARITY_DCM_TAU_MAX_S) ||
-              !pdcm_in(cfg->ra_i_min_A_q16, 1, 30 * PDCM_ONE_Q16) ||
-              !pdcm_in(cfg->ra_gate_q16, 1, 32 * PDCM_ONE_Q16) ||
-              !pdcm_in(cfg->ra_rate_max_ohm_s_q24, 0, PDCM_Q24(1, 1)) ||
-              !pdcm_in(cfg->ra_min_ohm_q24, PDCM_Q24(1, 1000), cfg->ra_ohm_q24) ||
-              !pdcm_in(cfg->ra_max_ohm_q24, cfg->ra_ohm_q24, PDCM_Q24(100, 1)))) {
+              !pdcm_in(cfg->ra_i_min_A_q16, 1, 30 * CANFDI_Q16_ONE) ||
+              !pdcm_in(cfg->ra_gate_q16, 1, 32 * CANFDI_Q16_ONE) ||
+              !pdcm_in(cfg->ra_rate_max_ohm_s_q24, 0, CANFDI_Q24(1, 1)) ||
+              !pdcm_in(cfg->ra_min_ohm_q24, CANFDI_Q24(1, 1000), cfg->ra_ohm_q24) ||
+              !pdcm_in(cfg->ra_max_ohm_q24, cfg->ra_ohm_q24, CANFDI_Q24(100, 1)))) {
     out = -CANFDI_EINVAL;
   } else if (!pdcm_in(cfg->unc_ra_ohm_q24, 0, cfg->ra_ohm_q24) ||
              !pdcm_in(cfg->unc_la_H_q24, 0, cfg->la_H_q24) ||
@@ -331,7 +329,7 @@ void canfdi_parity_dcm_reset(canfdi_parity_dcm_t *p)
 int32_t canfdi_parity_dcm_set_ra(canfdi_parity_dcm_t *p, int32_t ra_ohm_q24)
 {
   int32_t out = -CANFDI_EINVAL;
-  if ((p != NULL) && (p->cfg != NULL) && pdcm_in(ra_ohm_q24, PDCM_Q24(1, 1000), PDCM_Q24(100, 1))) {
+  if ((p != NULL) && (p->cfg != NULL) && pdcm_in(ra_ohm_q24, CANFDI_Q24(1, 1000), CANFDI_Q24(100, 1))) {
     p->ra_hat_ohm_q24 = ra_ohm_q24;
     if (p->cfg->ra_track != 0U) {
       p->ra_hat_ohm_q24 =
@@ -483,7 +481,7 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
      * filtered by the same SVF. sgn is linear inside +-w_band. */
     acc = pdcm_mac(0, k[CANFDI_PDCM_K_INVB], w_avg, 16U, false);
     sgn_q16 = canfdi_clamp_s32(canfdi_sat_s64_to_s32(canfdi_asr64_rnd(acc, PDCM_ACC_FRAC - 16U)),
-                               -PDCM_ONE_Q16, PDCM_ONE_Q16);
+                               -CANFDI_Q16_ONE, CANFDI_Q16_ONE);
     z = canfdi_add_s32_sat(in->load_Nm_q16, canfdi_mul_s32_qn(c->mf0_Nm_q24, sgn_q16, 24U));
 
     /* Late load: a change of the known load holds r2..r4 (header). */
@@ -682,20 +680,20 @@ void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
   /* Base thresholds: ~6 x the fault-free noise sigma measured with the
    * reference noise model (see the header), rounded up. */
   static const int32_t base_q16[CANFDI_PARITY_DCM_N_RES] = {
-      (int32_t)CANFDI_QN_RATIO_(8, 100, 16),  /* r1 0.08 V */
-      (int32_t)CANFDI_QN_RATIO_(2, 100, 16),  /* r2 0.02 N m */
-      (int32_t)CANFDI_QN_RATIO_(2, 100, 16),  /* r3 0.02 N m */
-      (int32_t)CANFDI_QN_RATIO_(12, 100, 16), /* r4 0.12 V */
+      CANFDI_Q16_MILLI(80),  /* r1 0.08 V */
+      CANFDI_Q16_MILLI(20),  /* r2 0.02 N m */
+      CANFDI_Q16_MILLI(20),  /* r3 0.02 N m */
+      CANFDI_Q16_MILLI(120), /* r4 0.12 V */
   };
   if (cfg != NULL) {
-    cfg->ra_ohm_q24 = PDCM_Q24(152, 100);
-    cfg->la_H_q24 = PDCM_Q24(682, 100000);
-    cfg->psi_Vs_q24 = PDCM_Q24(33, 100);
-    cfg->j_kgm2_q24 = PDCM_Q24(192, 100000);
-    cfg->mf1_Nms_q24 = PDCM_Q24(36, 100000);
-    cfg->mf0_Nm_q24 = PDCM_Q24(11, 100);
+    cfg->ra_ohm_q24 = CANFDI_Q24(152, 100);
+    cfg->la_H_q24 = CANFDI_Q24(682, 100000);
+    cfg->psi_Vs_q24 = CANFDI_Q24(33, 100);
+    cfg->j_kgm2_q24 = CANFDI_Q24(192, 100000);
+    cfg->mf1_Nms_q24 = CANFDI_Q24(36, 100000);
+    cfg->mf0_Nm_q24 = CANFDI_Q24(11, 100);
     cfg->omega_c_rad_s = 100;
-    cfg->w_band_rad_s_q16 = 2 * PDCM_ONE_Q16;
+    cfg->w_band_rad_s_q16 = 2 * CANFDI_Q16_ONE;
     cfg->settle_steps = 60U;
     for (k = 0U; k < CANFDI_PARITY_DCM_N_RES; k++) {
       cfg->band[k].base = base_q16[k];
@@ -709,20 +707,20 @@ void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
     cfg->ra_track = 1U;
     cfg->ra_block_steps = 100U;
     cfg->ra_tau_s = 60U;
-    cfg->ra_i_min_A_q16 = PDCM_ONE_Q16; /* 1 A */
-    cfg->ra_gate_q16 = PDCM_ONE_Q16;
+    cfg->ra_i_min_A_q16 = CANFDI_Q16_ONE; /* 1 A */
+    cfg->ra_gate_q16 = CANFDI_Q16_ONE;
     cfg->ra_learn_blocks = 20U;
-    cfg->ra_rate_max_ohm_s_q24 = PDCM_Q24(1, 2000); /* 0.5 mOhm/s = 1.8 Ohm/h */
-    cfg->ra_min_ohm_q24 = PDCM_Q24(100, 100);
-    cfg->ra_max_ohm_q24 = PDCM_Q24(200, 100);
+    cfg->ra_rate_max_ohm_s_q24 = CANFDI_Q24(1, 2000); /* 0.5 mOhm/s = 1.8 Ohm/h */
+    cfg->ra_min_ohm_q24 = CANFDI_Q24(100, 100);
+    cfg->ra_max_ohm_q24 = CANFDI_Q24(200, 100);
     cfg->load_tau_s = 0U;
     cfg->load_hold_steps = 0U;
     /* Stated uncertainties (derivation in the header, "Thresholds"):
      * dR 10 mOhm = the tracker's lag bound, heating rate 0.17 mOhm/s times
      * ra_tau 60 s; dL 2 % and dJ 2 % = the identification class of the
      * parameters (issue 4 acceptance of the estimator). */
-    cfg->unc_ra_ohm_q24 = PDCM_Q24(1, 100);
-    cfg->unc_la_H_q24 = PDCM_Q24(682 * 2, 10000000);
-    cfg->unc_j_kgm2_q24 = PDCM_Q24(192 * 2, 10000000);
+    cfg->unc_ra_ohm_q24 = CANFDI_Q24(1, 100);
+    cfg->unc_la_H_q24 = CANFDI_Q24(682 * 2, 10000000);
+    cfg->unc_j_kgm2_q24 = CANFDI_Q24(192 * 2, 10000000);
   }
 }

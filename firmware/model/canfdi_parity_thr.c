@@ -5,10 +5,8 @@
 #include "model/canfdi_parity_thr.h"
 
 #include "core/canfdi_count.h"
+#include "core/canfdi_qconst.h"
 
-#define PTHR_ONE_Q16 ((int32_t)65536)
-#define PTHR_Q24(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 24))
-#define PTHR_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 16))
 /* Bound on |omega_hat|: 2000 rad/s (Q32), far above any valve speed. */
 #define PTHR_W_MAX_Q32 ((int64_t)2000 << 32)
 /* theta_arm follows the TPS mean with 1/2^8 per step while they agree. */
@@ -143,29 +141,29 @@ int32_t canfdi_parity_thr_cfg_check(const canfdi_parity_thr_cfg_t *cfg)
   unsigned k;
   if (cfg == NULL) {
     out = -CANFDI_EINVAL;
-  } else if (!pthr_in(cfg->tps1_zero_V_q16, 0, 5 * PTHR_ONE_Q16) ||
-             !pthr_in(cfg->tps2_zero_V_q16, 0, 5 * PTHR_ONE_Q16) ||
-             !pthr_in(cfg->tps_slope_V_rad_q16, PTHR_Q16(1, 10), 10 * PTHR_ONE_Q16) ||
-             !pthr_in(cfg->tps_sum_V_q16, 0, 10 * PTHR_ONE_Q16) ||
+  } else if (!pthr_in(cfg->tps1_zero_V_q16, 0, 5 * CANFDI_Q16_ONE) ||
+             !pthr_in(cfg->tps2_zero_V_q16, 0, 5 * CANFDI_Q16_ONE) ||
+             !pthr_in(cfg->tps_slope_V_rad_q16, CANFDI_Q16(1, 10), 10 * CANFDI_Q16_ONE) ||
+             !pthr_in(cfg->tps_sum_V_q16, 0, 10 * CANFDI_Q16_ONE) ||
              !pthr_in(cfg->tps_min_V_q16, 0, cfg->tps_max_V_q16) ||
-             !pthr_in(cfg->tps_max_V_q16, cfg->tps_min_V_q16, 10 * PTHR_ONE_Q16) ||
-             !pthr_in(cfg->i_max_A_q16, 1, 100 * PTHR_ONE_Q16) ||
-             !pthr_in(cfg->r_ohm_q24, PTHR_Q24(1, 100), PTHR_Q24(100, 1)) ||
-             !pthr_in(cfg->l_H_q24, 0, PTHR_Q24(1, 10)) ||
-             !pthr_in(cfg->k_Nm_A_q24, PTHR_Q24(1, 100), PTHR_Q24(10, 1)) ||
-             !pthr_in(cfg->j_kgm2_q24, PTHR_Q24(1, 10000), PTHR_Q24(1, 1)) ||
-             !pthr_in(cfg->b_Nms_q24, 0, PTHR_Q24(10, 1)) ||
-             !pthr_in(cfg->spring_Nm_rad_q24, 0, PTHR_Q24(10, 1)) ||
-             !pthr_in(cfg->pretension_Nm_q24, 0, PTHR_Q24(10, 1)) ||
-             !pthr_in(cfg->friction_Nm_q24, 0, PTHR_Q24(10, 1)) ||
-             !pthr_in(cfg->max_rad_q16, PTHR_Q16(1, 10), 4 * PTHR_ONE_Q16) ||
+             !pthr_in(cfg->tps_max_V_q16, cfg->tps_min_V_q16, 10 * CANFDI_Q16_ONE) ||
+             !pthr_in(cfg->i_max_A_q16, 1, 100 * CANFDI_Q16_ONE) ||
+             !pthr_in(cfg->r_ohm_q24, CANFDI_Q24(1, 100), CANFDI_Q24(100, 1)) ||
+             !pthr_in(cfg->l_H_q24, 0, CANFDI_Q24(1, 10)) ||
+             !pthr_in(cfg->k_Nm_A_q24, CANFDI_Q24(1, 100), CANFDI_Q24(10, 1)) ||
+             !pthr_in(cfg->j_kgm2_q24, CANFDI_Q24(1, 10000), CANFDI_Q24(1, 1)) ||
+             !pthr_in(cfg->b_Nms_q24, 0, CANFDI_Q24(10, 1)) ||
+             !pthr_in(cfg->spring_Nm_rad_q24, 0, CANFDI_Q24(10, 1)) ||
+             !pthr_in(cfg->pretension_Nm_q24, 0, CANFDI_Q24(10, 1)) ||
+             !pthr_in(cfg->friction_Nm_q24, 0, CANFDI_Q24(10, 1)) ||
+             !pthr_in(cfg->max_rad_q16, CANFDI_Q16(1, 10), 4 * CANFDI_Q16_ONE) ||
              !pthr_in(cfg->limp_home_rad_q16, 0, cfg->max_rad_q16) ||
-             !pthr_in(cfg->lh_width_rad_q16, PTHR_Q16(1, 10000), PTHR_Q16(1, 10)) ||
+             !pthr_in(cfg->lh_width_rad_q16, CANFDI_Q16(1, 10000), CANFDI_Q16(1, 10)) ||
              !pthr_in(cfg->omega_c_rad_s, 20, 1000) ||
              !pthr_in(cfg->obs_lambda_rad_s, 1, 100) || (cfg->obs_emf_gain_q31 < 0) ||
-             !pthr_in(cfg->stick_w_rad_s_q16, 0, PTHR_ONE_Q16) ||
-             !pthr_in(cfg->rest_w_rad_s_q16, 0, 100 * PTHR_ONE_Q16) ||
-             !pthr_in(cfg->jump_rad_q16, 0, PTHR_ONE_Q16) ||
+             !pthr_in(cfg->stick_w_rad_s_q16, 0, CANFDI_Q16_ONE) ||
+             !pthr_in(cfg->rest_w_rad_s_q16, 0, 100 * CANFDI_Q16_ONE) ||
+             !pthr_in(cfg->jump_rad_q16, 0, CANFDI_Q16_ONE) ||
              (cfg->res_tau_us > 10000000U) || (cfg->select_ratio < 1U)) {
     out = -CANFDI_EINVAL;
   } else {
@@ -199,13 +197,13 @@ int32_t canfdi_parity_thr_init(canfdi_parity_thr_t *p, const canfdi_parity_thr_c
       const uint64_t t_us = (uint64_t)CANFDI_CFG_STEP_US;
       const uint64_t lam = (uint64_t)cfg->obs_lambda_rad_s;
       p->cfg = cfg;
-      p->inv_slope_q24 = canfdi_div_s32_qn(PTHR_ONE_Q16, cfg->tps_slope_V_rad_q16, 24U);
+      p->inv_slope_q24 = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->tps_slope_V_rad_q16, 24U);
       /* T/J in Q24 = T_us 2^48 / (1e6 J_q24); L/T in Q24 = L_q24 1e6 / T_us;
        * 1/K in Q24 = 2^48 / K_q24. All fit by the domain. */
       p->t_over_j_q24 = pthr_ratio_init(t_us, 48U, 1000000U * (uint64_t)cfg->j_kgm2_q24);
       p->l_over_t_q24 = pthr_ratio_init((uint64_t)cfg->l_H_q24 * 1000000U, 0U, t_us);
       p->inv_k_q24 = pthr_ratio_init(1U, 48U, (uint64_t)cfg->k_Nm_A_q24);
-      p->inv_lhw_q16 = canfdi_div_s32_qn(PTHR_ONE_Q16, cfg->lh_width_rad_q16, 16U);
+      p->inv_lhw_q16 = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->lh_width_rad_q16, 16U);
       p->t_q31 = pthr_ratio_init(t_us, 31U, 1000000U);
       /* observer: double pole at 1 - lambda T: l1 = 2 lambda T, l2 = lambda^2 T */
       p->l1_q31 = pthr_ratio_init(2U * lam * t_us, 31U, 1000000U);
@@ -292,7 +290,7 @@ static void pthr_predict(canfdi_parity_thr_t *p, int32_t i_avg_q16, int32_t di_q
   const int32_t w0_q16 = pthr_q32_to_q16(w0);
   const int32_t d_q16 = canfdi_sub_s32_sat(pthr_q32_to_q16(p->th_hat_q32), c->limp_home_rad_q16);
   const int32_t sat_q16 = canfdi_clamp_s32(canfdi_mul_s32_qn(d_q16, p->inv_lhw_q16, 16U),
-                                           -PTHR_ONE_Q16, PTHR_ONE_Q16);
+                                           -CANFDI_Q16_ONE, CANFDI_Q16_ONE);
   const int64_t tc_q40 = (int64_t)c->friction_Nm_q24 * 65536;
   const int64_t stick_q32 = (int64_t)c->stick_w_rad_s_q16 * 65536;
   int64_t drive;
@@ -670,7 +668,7 @@ void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg)
   unsigned k;
   /* corr 0.01 V, armature 0.05 V, positions 0.012 rad (0.7 deg) */
   static const int32_t base_q16[CANFDI_PARITY_THR_N_RES] = {
-      PTHR_Q16(1, 100), PTHR_Q16(5, 100), PTHR_Q16(12, 1000), PTHR_Q16(12, 1000)};
+      CANFDI_Q16_MILLI(10), CANFDI_Q16_MILLI(50), CANFDI_Q16_MILLI(12), CANFDI_Q16_MILLI(12)};
   /* band growth per unit/s of excitation (2^-20 resolution): the armature
    * band grows with |du/dt| [V per V/s], the position bands with the
    * angular speed [rad per rad/s]: model-uncertainty propagation, see
@@ -680,32 +678,31 @@ void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg)
   static const int32_t gain[CANFDI_PARITY_THR_N_RES] = {0, 100, 3548, 3548};
   static const uint32_t tau_us[CANFDI_PARITY_THR_N_RES] = {20000U, 20000U, 66667U, 66667U};
   if (cfg != NULL) {
-    cfg->tps1_zero_V_q16 = PTHR_Q16(1, 2);
-    cfg->tps2_zero_V_q16 = PTHR_Q16(9, 2);
-    /* 4 V over 90 deg: 8 / pi V/rad */
-    cfg->tps_slope_V_rad_q16 = PTHR_Q16(8000000, 3141593);
-    cfg->tps_sum_V_q16 = 5 * PTHR_ONE_Q16;
-    cfg->tps_min_V_q16 = PTHR_Q16(1, 4);
-    cfg->tps_max_V_q16 = PTHR_Q16(19, 4);
-    cfg->i_max_A_q16 = PTHR_Q16(98, 10);
-    cfg->r_ohm_q24 = PTHR_Q24(15, 10);
-    cfg->l_H_q24 = PTHR_Q24(15, 10000);
-    cfg->k_Nm_A_q24 = PTHR_Q24(383, 1000);
-    cfg->j_kgm2_q24 = PTHR_Q24(21, 10000);
-    cfg->b_Nms_q24 = PTHR_Q24(88, 10000);
-    cfg->spring_Nm_rad_q24 = PTHR_Q24(87, 1000);
-    cfg->pretension_Nm_q24 = PTHR_Q24(396, 1000);
-    cfg->friction_Nm_q24 = PTHR_Q24(284, 1000);
-    /* 6.5 deg, 0.5 deg, 90 deg */
-    cfg->limp_home_rad_q16 = PTHR_Q16(113446, 1000000);
-    cfg->lh_width_rad_q16 = PTHR_Q16(8727, 1000000);
-    cfg->max_rad_q16 = PTHR_Q16(1570796, 1000000);
+    cfg->tps1_zero_V_q16 = CANFDI_Q16_MILLI(500);
+    cfg->tps2_zero_V_q16 = CANFDI_Q16_MILLI(4500);
+    /* 4 V over 90 deg (8 / pi V/rad) */
+    cfg->tps_slope_V_rad_q16 = canfdi_div_s32_qn(CANFDI_Q16_MILLI(4000), CANFDI_Q16_DEG(90, 1), 16U);
+    cfg->tps_sum_V_q16 = 5 * CANFDI_Q16_ONE;
+    cfg->tps_min_V_q16 = CANFDI_Q16_MILLI(250);
+    cfg->tps_max_V_q16 = CANFDI_Q16_MILLI(4750);
+    cfg->i_max_A_q16 = CANFDI_Q16_MILLI(9800);
+    cfg->r_ohm_q24 = CANFDI_Q24(15, 10);
+    cfg->l_H_q24 = CANFDI_Q24(15, 10000);
+    cfg->k_Nm_A_q24 = CANFDI_Q24(383, 1000);
+    cfg->j_kgm2_q24 = CANFDI_Q24(21, 10000);
+    cfg->b_Nms_q24 = CANFDI_Q24(88, 10000);
+    cfg->spring_Nm_rad_q24 = CANFDI_Q24(87, 1000);
+    cfg->pretension_Nm_q24 = CANFDI_Q24(396, 1000);
+    cfg->friction_Nm_q24 = CANFDI_Q24(284, 1000);
+    cfg->limp_home_rad_q16 = CANFDI_Q16_DEG(65, 10);
+    cfg->lh_width_rad_q16 = CANFDI_Q16_DEG(5, 10);
+    cfg->max_rad_q16 = CANFDI_Q16_DEG(90, 1);
     cfg->omega_c_rad_s = 100;
     cfg->obs_lambda_rad_s = 30;
     cfg->obs_emf_gain_q31 = CANFDI_Q31_RATIO(3, 10);
-    cfg->stick_w_rad_s_q16 = PTHR_Q16(1, 1000);
-    cfg->rest_w_rad_s_q16 = PTHR_Q16(2, 10);
-    cfg->jump_rad_q16 = PTHR_Q16(1, 100);
+    cfg->stick_w_rad_s_q16 = CANFDI_Q16_MILLI(1);
+    cfg->rest_w_rad_s_q16 = CANFDI_Q16_MILLI(200);
+    cfg->jump_rad_q16 = CANFDI_Q16_MILLI(10);
     cfg->res_tau_us = 10000U;
     cfg->settle_steps = 60U;
     cfg->select_steps = 20U;
