@@ -141,10 +141,9 @@ int32_t canfdi_parity_thr_cfg_check(const canfdi_parity_thr_cfg_t *cfg)
   unsigned k;
   if (cfg == NULL) {
     out = -CANFDI_EINVAL;
-  } else if (!pthr_in(cfg->tps1_zero_V_q16, 0, 5 * CANFDI_Q16_ONE) ||
-             !pthr_in(cfg->tps2_zero_V_q16, 0, 5 * CANFDI_Q16_ONE) ||
-             !pthr_in(cfg->tps_slope_V_rad_q16, CANFDI_Q16(1, 10), 10 * CANFDI_Q16_ONE) ||
-             !pthr_in(cfg->tps_sum_V_q16, 0, 10 * CANFDI_Q16_ONE) ||
+  } else if ((canfdi_tps_cal_check(&cfg->tps1) != CANFDI_OK) ||
+             (canfdi_tps_cal_check(&cfg->tps2) != CANFDI_OK) ||
+             (cfg->tps2.slope_V_rad_q16 != -cfg->tps1.slope_V_rad_q16) ||
              !pthr_in(cfg->tps_min_V_q16, 0, cfg->tps_max_V_q16) ||
              !pthr_in(cfg->tps_max_V_q16, cfg->tps_min_V_q16, 10 * CANFDI_Q16_ONE) ||
              !pthr_in(cfg->i_max_A_q16, 1, 100 * CANFDI_Q16_ONE) ||
@@ -190,6 +189,8 @@ int32_t canfdi_parity_thr_init(canfdi_parity_thr_t *p, const canfdi_parity_thr_c
     out = canfdi_svf_init(&p->svf_u, &sc);
     out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_i, &sc) : out;
     out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_th, &sc) : out;
+    out = (out == CANFDI_OK) ? canfdi_tps_init(&p->tps[0], &cfg->tps1) : out;
+    out = (out == CANFDI_OK) ? canfdi_tps_init(&p->tps[1], &cfg->tps2) : out;
     for (k = 0U; (out == CANFDI_OK) && (k < CANFDI_PARITY_THR_N_RES); k++) {
       out = canfdi_adapt_init(&p->thr[k], &cfg->band[k]);
     }
@@ -197,7 +198,8 @@ int32_t canfdi_parity_thr_init(canfdi_parity_thr_t *p, const canfdi_parity_thr_c
       const uint64_t t_us = (uint64_t)CANFDI_CFG_STEP_US;
       const uint64_t lam = (uint64_t)cfg->obs_lambda_rad_s;
       p->cfg = cfg;
-      p->inv_slope_q24 = canfdi_div_s32_qn(CANFDI_Q16_ONE, cfg->tps_slope_V_rad_q16, 24U);
+      /* complementary pair: TPS1 + TPS2 is the sum of the zeros (<= 10 V) */
+      p->tps_sum_V_q16 = canfdi_add_s32_sat(cfg->tps1.zero_V_q16, cfg->tps2.zero_V_q16);
       /* T/J in Q24 = T_us 2^48 / (1e6 J_q24); L/T in Q24 = L_q24 1e6 / T_us;
        * 1/K in Q24 = 2^48 / K_q24. All fit by the domain. */
       p->t_over_j_q24 = pthr_ratio_init(t_us, 48U, 1000000U * (uint64_t)cfg->j_kgm2_q24);
@@ -414,12 +416,10 @@ const canfdi_parity_thr_out_t *canfdi_parity_thr_step(canfdi_parity_thr_t *p,
     const bool ok1 = pthr_in(in->tps1_V_q16, c->tps_min_V_q16, c->tps_max_V_q16);
     const bool ok2 = pthr_in(in->tps2_V_q16, c->tps_min_V_q16, c->tps_max_V_q16);
     const uint8_t ok = (uint8_t)((ok1 ? 1U : 0U) | (ok2 ? 2U : 0U));
-    const int32_t th1 = canfdi_mul_s32_qn(canfdi_sub_s32_sat(in->tps1_V_q16, c->tps1_zero_V_q16),
-                                          p->inv_slope_q24, 24U);
-    const int32_t th2 = canfdi_mul_s32_qn(canfdi_sub_s32_sat(c->tps2_zero_V_q16, in->tps2_V_q16),
-                                          p->inv_slope_q24, 24U);
+    const int32_t th1 = canfdi_tps_V_to_rad_q16(&p->tps[0], in->tps1_V_q16);
+    const int32_t th2 = canfdi_tps_V_to_rad_q16(&p->tps[1], in->tps2_V_q16);
     const int32_t corr_raw = canfdi_sub_s32_sat(canfdi_add_s32_sat(in->tps1_V_q16, in->tps2_V_q16),
-                                                c->tps_sum_V_q16);
+                                                p->tps_sum_V_q16);
     const bool clip = (in->i_A_q16 >= c->i_max_A_q16) || (in->i_A_q16 <= -c->i_max_A_q16);
     const int32_t supply = (in->supply_V_q16 > 0) ? in->supply_V_q16 : 0;
     const int32_t u_app = in->enabled ? canfdi_clamp_s32(in->u_V_q16, -supply, supply) : 0;
@@ -678,11 +678,7 @@ void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg)
   static const int32_t gain[CANFDI_PARITY_THR_N_RES] = {0, 100, 3548, 3548};
   static const uint32_t tau_us[CANFDI_PARITY_THR_N_RES] = {20000U, 20000U, 66667U, 66667U};
   if (cfg != NULL) {
-    cfg->tps1_zero_V_q16 = CANFDI_Q16_MILLI(500);
-    cfg->tps2_zero_V_q16 = CANFDI_Q16_MILLI(4500);
-    /* 4 V over 90 deg (8 / pi V/rad) */
-    cfg->tps_slope_V_rad_q16 = canfdi_div_s32_qn(CANFDI_Q16_MILLI(4000), CANFDI_Q16_DEG(90, 1), 16U);
-    cfg->tps_sum_V_q16 = 5 * CANFDI_Q16_ONE;
+    canfdi_tps_cal_default(&cfg->tps1, &cfg->tps2);
     cfg->tps_min_V_q16 = CANFDI_Q16_MILLI(250);
     cfg->tps_max_V_q16 = CANFDI_Q16_MILLI(4750);
     cfg->i_max_A_q16 = CANFDI_Q16_MILLI(9800);

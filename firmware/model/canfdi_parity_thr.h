@@ -8,10 +8,12 @@
  * motor current i, the voltage the bridge applied over the last interval
  * (the previous command, limited here to +-supply; unknown while the bridge
  * is off, hence `enabled`), the measured bridge supply. Angles from the
- * potentiometers: theta1 = (TPS1 - tps1_zero) / slope,
- * theta2 = (tps2_zero - TPS2) / slope; a voltage outside
- * [tps_min, tps_max] marks that sensor out of range (open/short: the range
- * check of another module names it; here it only drops out).
+ * potentiometers through their characteristics (model/canfdi_tps.h):
+ * theta1 from cfg.tps1, theta2 from cfg.tps2, a complementary pair
+ * (tps2.slope = -tps1.slope, so TPS1 + TPS2 = tps1.zero + tps2.zero =
+ * tps_sum at every angle); a voltage outside [tps_min, tps_max] marks that
+ * sensor out of range (open/short: the range check of another module names
+ * it; here it only drops out).
  *
  * The residuals (index, unit):
  *   CORR  r = LP(TPS1 + TPS2 - tps_sum)                             [V]
@@ -221,6 +223,7 @@
 #include "core/canfdi_fixp.h"
 #include "detect/canfdi_adapt.h"
 #include "model/canfdi_svf.h"
+#include "model/canfdi_tps.h"
 
 #define CANFDI_PARITY_THR_N_RES 4U
 #define CANFDI_PARITY_THR_CORR 0U /* TPS1 + TPS2 - sum, V */
@@ -236,8 +239,9 @@
 
 /*
  * Configuration, caller-owned, must outlive the instance (thresholds point
- * into band[]). Domain (else -CANFDI_EINVAL): TPS zeros 0..5 V, slope
- * 0.1..10 V/rad, sum 0..10 V, 0 <= tps_min <= tps_max <= 10 V; i_max
+ * into band[]). Domain (else -CANFDI_EINVAL): tps1 and tps2 valid for
+ * canfdi_tps_cal_check and complementary (tps2.slope = -tps1.slope);
+ * 0 <= tps_min <= tps_max <= 10 V; i_max
  * > 0 and <= 100 A; R 0.01..100 Ohm, L 0..0.1 H, K 0.01..10 N m/A,
  * J 1e-4..1 kg m^2, B, spring, pretension, friction 0..10; max 0.1..4 rad,
  * 0 <= limp_home <= max, lh_width 1e-4..0.1 rad; wc 20..1000 rad/s;
@@ -246,10 +250,8 @@
  * canfdi_adapt with base > 0.
  */
 typedef struct {
-  int32_t tps1_zero_V_q16;     /* TPS1 at theta = 0 (0.5 V) */
-  int32_t tps2_zero_V_q16;     /* TPS2 at theta = 0 (4.5 V) */
-  int32_t tps_slope_V_rad_q16; /* |dTPS/dtheta| (4 V per 90 deg) */
-  int32_t tps_sum_V_q16;       /* TPS1 + TPS2 (5 V) */
+  canfdi_tps_cal_t tps1;       /* TPS1 characteristic (model/canfdi_tps.h) */
+  canfdi_tps_cal_t tps2;       /* TPS2: the complement, slope -tps1.slope */
   int32_t tps_min_V_q16;       /* in-range window (0.25 .. 4.75 V) */
   int32_t tps_max_V_q16;
   int32_t i_max_A_q16;         /* |i| at/above: current sensor clipped */
@@ -321,7 +323,8 @@ typedef struct {
   canfdi_svf_t svf_i;
   canfdi_svf_t svf_th;
   canfdi_adapt_t thr[CANFDI_PARITY_THR_N_RES];
-  int32_t inv_slope_q24;  /* 1 / slope, rad/V */
+  canfdi_tps_t tps[2];    /* TPS1, TPS2 characteristics, prepared */
+  int32_t tps_sum_V_q16;  /* TPS1 + TPS2 = tps1.zero + tps2.zero */
   int32_t t_over_j_q24;   /* T / J */
   int32_t l_over_t_q24;   /* L / T */
   int32_t inv_k_q24;      /* 1 / K */
@@ -360,8 +363,9 @@ typedef struct {
 
 /* The substitute DV-E5 class valve of the design brief (R 1.5, L 1.5 mH,
  * K 0.383, J 0.0021, B 0.0088, spring 0.087, pretension 0.396, friction
- * 0.284, limp-home 6.5 deg, 90 deg travel; TPS 0.5 + 4 theta/90 deg and
- * 4.5 - 4 theta/90 deg), wc 100 rad/s, lambda 30 rad/s, emf gain 0.3,
+ * 0.284, limp-home 6.5 deg, 90 deg travel; TPS as canfdi_tps_cal_default:
+ * 0.5 + 4 theta/90 deg and 4.5 - 4 theta/90 deg), wc 100 rad/s, lambda
+ * 30 rad/s, emf gain 0.3,
  * jump 0.01 rad, select ratio 4 for 20 steps at rest (< 0.2 rad/s),
  * release after 200 steps, bands CORR 0.01 V (~16 sigma of the filtered
  * noise), ARM 0.05 V + 9.5e-5 s x filtered |du/dt| (stroke transients),

@@ -39,6 +39,7 @@
 #include "model/canfdi_est_thr.h"
 #include "model/canfdi_parity_dcm.h"
 #include "model/canfdi_parity_thr.h"
+#include "model/canfdi_tps.h"
 #include "ft/canfdi_actmgr.h"
 #include "ft/canfdi_degrade.h"
 #include "ft/canfdi_vote.h"
@@ -584,6 +585,19 @@ static void guard_parity_dcm(void)
   canfdi_parity_dcm_reset(&p);
 }
 
+static void guard_tps(void)
+{
+  static canfdi_tps_cal_t cal[2];
+  static canfdi_tps_t t;
+
+  canfdi_tps_cal_default(&cal[0], &cal[1]);
+  cal[in_n & 1U].zero_V_q16 = in_s32[0];
+  sink32(canfdi_tps_cal_check(&cal[0]));
+  sink32(canfdi_tps_init(&t, &cal[in_n & 1U]));
+  sink32(canfdi_tps_V_to_rad_q16(&t, in_s32[1]));
+  sink32(canfdi_tps_rad_to_V_q16(&cal[0], in_s32[2]));
+}
+
 static void guard_parity_thr(void)
 {
   static canfdi_parity_thr_cfg_t cfg;
@@ -830,6 +844,7 @@ int main(void)
   guard_est_dcm();
   guard_est_thr();
   guard_parity_dcm();
+  guard_tps();
   guard_parity_thr();
   guard_ft();
   guard_ctrl();
