@@ -48,7 +48,7 @@
  * inputs): at most 408 instructions on Cortex-M0 (mean 394), 148 on
  * Cortex-M4 (mean 137). canfdi_adapt_exceeds: one 64-bit negate and
  * compare, 27 (M0) / 17 (M4) instructions. Stack: about 90 bytes worst
- * chain on M0+ (56 here + 28 in __aeabi_lmul). Code: 804 bytes (M0+).
+ * chain on M0+ (56 here + 28 in __aeabi_lmul). Code: 792 bytes (M0+).
  * RAM per instance:
  * sizeof(canfdi_adapt_t) = 40 bytes on a 32-bit ARM target (filter state 8,
  * alpha 4, previous u 4, threshold 4, flag 4, config pointer 4,

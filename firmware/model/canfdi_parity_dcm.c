@@ -791,7 +791,7 @@ void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
     /* Stated uncertainties (derivation in the header, "Thresholds"):
      * dR 10 mOhm = the tracker's lag bound, heating rate 0.17 mOhm/s times
      * ra_tau 60 s; dL 2 % and dJ 2 % = the identification class of the
-     * parameters (issue 4 acceptance of the estimator). */
+     * parameters (the acceptance of canfdi_est_dcm, docs/requirements.md). */
     cfg->unc_ra_ohm_q24 = CANFDI_Q24(1, 100);
     cfg->unc_la_H_q24 = CANFDI_Q24(682 * 2, 10000000);
     cfg->unc_j_kgm2_q24 = CANFDI_Q24(192 * 2, 10000000);

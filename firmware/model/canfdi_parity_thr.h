@@ -35,11 +35,11 @@
  *         two and the previous increment, so the jump is outvoted; theta_arm
  *         leaks towards the TPS mean (1/2^8 per step) while the two agree,
  *         which bounds its drift. (Switching between the sensors every step
- *         would inject white speed noise: a plain median of three raised
- *         the fault-free noise of ARM from 2 mV to 28 mV.) A constant TPS offset has
- *         no derivative, so ARM is decoupled from TPS drift, from the very
- *         first sample of a jump; it sees R (dR i), K, an open circuit and
- *         current-sensor errors.
+ *         would inject white speed noise: with a plain median of three the
+ *         fault-free noise of ARM is 28 mV instead of 2 mV.) A constant
+ *         TPS offset has no derivative, so ARM is decoupled from TPS drift,
+ *         from the very first sample of a jump; it sees R (dR i), K, an
+ *         open circuit and current-sensor errors.
  *   POS1  r = LP(theta1 - theta_hat),  POS2  r = LP(theta2 - theta_hat)  [rad]
  *         theta_hat from the valve observer below. LP is a first-order
  *         low-pass with time constant res_tau (noise), identical on the
@@ -76,7 +76,7 @@
  *              poor there; an offset, even a drifting one, barely changes
  *              within those few steps. Measured coasting drift with the
  *              test plant: ~5 mrad over 20 s of 20-deg strokes every 0.5 s;
- *        TPS1 / TPS2  once, while coasting *        TPS1 / TPS2  once, while coasting, one position residual is more
+ *        TPS1 / TPS2  once, while coasting, one position residual is more
  *              than select_ratio (4) times the other and above its band,
  *              with the valve at rest (|dtheta/dt| <= rest_w), for
  *              select_steps (20) consecutive steps: the model agrees with
@@ -171,13 +171,14 @@
  * (f = 0) the band is the base, 0.012 rad: a TPS offset of 2 % of full
  * scale (0.1 V = 0.039 rad) stays 3 x outside in steady state; during and
  * just after a large stroke it can be inside (accepted: the correlation
- * residual CORR still sees it at once). Before this, closing strokes of
- * more than ~40 deg drove POS1/POS2 to 1.75 x the fixed band in the 10 h
- * bench; with it, 0.44 (bench_longrun).
+ * residual CORR still sees it at once). In the 10 h bench (bench_longrun)
+ * the fault-free POS1/POS2 peak at 0.44 of this band, where closing
+ * strokes of more than ~40 deg reach 1.75 times a fixed band.
  * out.rn_q16 = r / threshold (1.0 = threshold); exceed = valid and beyond.
  *
- * Scaling and overflow. Inputs Q16.16 (V, A). Angles Q16.16 rad; slope
- * Q16.16 V/rad; mechanical and electrical parameters Q8.24. Torques and the
+ * Scaling and overflow. Inputs Q16.16 (V, A). Angles Q16.16 rad, from the
+ * TPS characteristics (canfdi_tps.h: 1 / |slope| in Q8.24, exact to 1 LSB);
+ * mechanical and electrical parameters Q8.24. Torques and the
  * armature voltage balance are Q40 in int64 (Q24 x Q16.16 exact products,
  * saturating sums), reduced to Q24 before the division by J (T/J as Q24)
  * or K (1/K as Q24) -> Q48 -> Q32. Observer states theta_hat and w_hat are
@@ -207,12 +208,14 @@
  * Cost per canfdi_parity_thr_step: 3 SVF steps of order 3, 4
  * canfdi_adapt_step, 4 canfdi_div_s32_qn, ~20 64-bit multiplies and ~60
  * saturating 64-bit adds/shifts. Measured executed instructions per call
- * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; 4000 calls,
- * synthetic motion including out-of-range inputs; min / mean / max):
- *   Cortex-M4    3 900 /  5 200 /  5 300
- *   Cortex-M0+  10 200 / 13 100 / 13 500  (instruction counts)
- * Code: 5.3 kB (M4), 6.2 kB (M0+) plus canfdi_svf, adapt and fixp.
- * Memory: sizeof(canfdi_parity_thr_t) = 712 bytes on a 32-bit target,
+ * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; default cfg,
+ * 4000 calls of synthetic strokes between 0.3 and 0.8 rad with current
+ * swings, clipped and out-of-range samples and bridge-off phases; min /
+ * mean / max):
+ *   Cortex-M4    4 300 /  5 300 /  5 300
+ *   Cortex-M0+  11 000 / 13 400 / 13 600  (instruction counts)
+ * Code: 5.1 kB (M4), 6.0 kB (M0+) plus canfdi_tps, svf, adapt and fixp.
+ * Memory: sizeof(canfdi_parity_thr_t) = 736 bytes on a 32-bit target,
  * caller-owned; the configuration (188 bytes) must outlive the instance.
  * No heap, no globals, no floating point; reentrant per instance.
  */
@@ -361,13 +364,12 @@ typedef struct {
   canfdi_parity_thr_diag_t diag;
 } canfdi_parity_thr_t;
 
-/* The substitute DV-E5 class valve of the design brief (R 1.5, L 1.5 mH,
+/* The substitute DV-E5 class valve of docs/design.md (R 1.5, L 1.5 mH,
  * K 0.383, J 0.0021, B 0.0088, spring 0.087, pretension 0.396, friction
  * 0.284, limp-home 6.5 deg, 90 deg travel; TPS as canfdi_tps_cal_default:
  * 0.5 + 4 theta/90 deg and 4.5 - 4 theta/90 deg), wc 100 rad/s, lambda
- * 30 rad/s, emf gain 0.3,
- * jump 0.01 rad, select ratio 4 for 20 steps at rest (< 0.2 rad/s),
- * release after 200 steps, bands CORR 0.01 V (~16 sigma of the filtered
+ * 30 rad/s, emf gain 0.3, jump 0.01 rad, select ratio 4 for 20 steps at
+ * rest (< 0.2 rad/s), release after 200 steps, bands CORR 0.01 V (~16 sigma of the filtered
  * noise), ARM 0.05 V + 9.5e-5 s x filtered |du/dt| (stroke transients),
  * POS 0.012 rad (0.7 deg, ~30 % of a 2 % TPS offset). NULL ignored. */
 void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg);

@@ -2,7 +2,7 @@
  * test_ctrl_dcm.c — closed-loop tests of canfdi_ctrl_dcm (fixed point)
  * against the host_sim DC motor (double precision).
  *
- * Rig: the design brief's motor (Isermann: R_A warm 1.52 Ohm — the winding
+ * Rig: the motor of docs/design.md (Isermann: R_A warm 1.52 Ohm — the winding
  * starts at 52.3 C, thermal model on — L_A 6.82 mH, Psi 0.33 V s,
  * J 1.92e-3 kg m^2, M_F1 0.36e-3, M_F0 0.11 N m), 48 V supply, bridge A,
  * nominal load 1.2 N m (~4 A) applied from t = 0. The controller sees the

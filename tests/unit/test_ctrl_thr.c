@@ -2,12 +2,12 @@
  * test_ctrl_thr.c — closed-loop tests of canfdi_ctrl_thr (fixed point)
  * against the host_sim throttle valve (double precision).
  *
- * Rig: the design brief's valve (J 0.0021, B 0.0088, K 0.383, R 1.5 Ohm,
+ * Rig: the valve of docs/design.md (J 0.0021, B 0.0088, K 0.383, R 1.5 Ohm,
  * L 1.5 mH, spring 0.087 N m/rad, pretension 0.396 N m, Coulomb friction
  * 0.284 N m, limp-home 6.5 deg, stops at 0 and 90 deg), 13.5 V supply. The
- * controller gets the angle as the application will (for now: the mean of
- * the two potentiometers, as the simulator's reference controller computes
- * it; later the voted angle) from the simulated sensors with noise as in
+ * controller gets the angle as the mean of the two potentiometers (as the
+ * simulator's reference controller computes it; fault-free, this is what
+ * the application's vote delivers) from the simulated sensors with noise as in
  * host_sim/scenarios/nominal.scn (TPS 3 mV each, i.e. 0.07 deg; supply
  * 10 mV; 12-bit ADC: 1.2 mV = 0.027 deg), converted to Q16.16 rad. Figures
  * are judged on the true angle. Closed-loop tests run three noise seeds.
@@ -16,8 +16,8 @@
  * accelerates at up to ~1200 rad/s^2 and its speed is limited by the
  * back-EMF to ~(13.5 - R T_load / K) / K ~ 25 rad/s, so 70 deg (1.22 rad)
  * take ~60 ms plus ~10 ms to brake: a 10 -> 80 deg stroke settles within
- * +-1 deg in ~80 ms (measured), asserted < 100 ms (the design brief's
- * "well under 100 ms"). Holding: the 0.07 deg sensor noise, halved by
+ * +-1 deg in ~80 ms (measured), asserted < 100 ms (the requirement of
+ * docs/requirements.md: "well under 100 ms"). Holding: the 0.07 deg sensor noise, halved by
  * averaging the two sensors, and the Coulomb friction band give a steady
  * error of a few hundredths of a degree; asserted |e| < 0.25 deg (peak)
  * and |mean| < 0.1 deg. Compensation: without the spring term the PID must

@@ -1,7 +1,7 @@
 /*
  * test_cusum.c — unit tests of canfdi_cusum (two-sided tabular CUSUM).
  *
- * Acceptance point (issue 2): driven by N(delta, 1) samples from a seeded
+ * Acceptance point (docs/requirements.md): driven by N(delta, 1) samples from a seeded
  * generator, the fixed-point CUSUM with k = 0.5 reproduces the published
  * average run lengths of the two-sided tabular CUSUM (Montgomery, Table 9.3:
  * in control 168 for h = 4 and 465 for h = 5; for a 1 sigma shift 8.38 and

@@ -1,6 +1,7 @@
 /*
- * test_est_dcm.c — acceptance tests of canfdi_est_dcm (issue 4) on traces of
- * the host_sim plant library.
+ * test_est_dcm.c — acceptance tests of canfdi_est_dcm (the estimator
+ * requirements of docs/requirements.md) on traces of the host_sim plant
+ * library.
  *
  * Rig: Isermann's motor (R_A 1.52 Ohm held constant — thermal model off —
  * L_A 6.82 mH, Psi 0.33 V s, J 1.92e-3 kg m^2, M_F1 0.36e-3, M_F0 0.11),
@@ -9,7 +10,7 @@
  * (about the mechanical time constant), sensor noise of a few ADC LSB
  * (U_A 0.05 V, I_A 0.02 A, w 0.2 rad/s) and 12-bit quantisation. Each test
  * runs for three noise seeds (loop tests), so no figure rests on one
- * stream. Figures are printed; the tolerances are the issue's:
+ * stream. Figures are printed; the tolerances are the requirements':
  *   - converged window 5..20 s: R_A and Psi within 2 %, J within 5 %, the
  *     standard deviation of each within 2 % (of the mean);
  *   - abrupt +10 % R_A at 20 s: the estimate reaches +5 % within 2 s;

@@ -1,6 +1,6 @@
 /*
  * test_est_thr.c — acceptance tests of canfdi_est_thr on traces of the
- * host_sim throttle valve (design-brief parameters: R 1.5 Ohm, L 1.5 mH,
+ * host_sim throttle valve (parameters of docs/design.md: R 1.5 Ohm, L 1.5 mH,
  * K 0.383, J 0.0021, B 0.0088, spring 0.087, pretension 0.396, friction
  * 0.284, limp-home 6.5 deg) under the simulator's reference position
  * controller.
@@ -29,10 +29,11 @@
  *     -0.6 %), so it is a property of the data, not of the arithmetic.
  *     The test prints MET/SHORT for the 10 % target and asserts only a 25 %
  *     gross-error guard (a regression catcher, not the acceptance figure);
- *     the threshold was not moved to fit the data;
+ *     the 10 % target stays the target, reported rather than fitted to the
+ *     data;
  *   sd of R and K below 2 %, of the spring constant below 10 %.
  * J, B, pretension, friction and L are printed, not asserted (they are
- * not acceptance figures of the issue; see the report).
+ * not acceptance figures of docs/requirements.md).
  * A second test holds the angle constant for 30 s after excitation: the
  * estimators keep D > 0 and their trace bound at every step, and R and K
  * stay within their tolerance.

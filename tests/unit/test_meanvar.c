@@ -2,7 +2,7 @@
  * test_meanvar.c — unit tests of canfdi_meanvar (recursive mean/variance
  * with exponential forgetting).
  *
- * Acceptance point (issue 2): the fixed-point estimator agrees with a
+ * Acceptance point (docs/requirements.md): the fixed-point estimator agrees with a
  * double-precision computation of the SAME recursion with the SAME quantised
  * alpha, within stated tolerances in LSB, across the full input range,
  * without overflow (UBSan would abort on any signed overflow).
