@@ -83,10 +83,10 @@
  * speed uniformly random in +-200 rad/s, I_A in +-20 A, 48 V supply; min /
  * mean / max, the M0+ code run on the emulated M4 as instruction counts):
  *                                  Cortex-M4          Cortex-M0+
- *   RUN with the current loop      628 / 683 / 734    1133 / 1209 / 1278
- *   all modes at random, no I_A    137 / 448 / 627     178 /  807 / 1153
- * Stack 96 bytes + canfdi_pi_step_q16's 84 (M0+, -fstack-usage); init uses
- * 296. Code 1952 bytes (M0+). canfdi_ctrl_dcm_init: two canfdi_pi_init and
+ *   RUN with the current loop      628 / 683 / 734    1135 / 1212 / 1281
+ *   all modes at random, no I_A    140 / 450 / 631     176 /  818 / 1172
+ * Stack 88 bytes + canfdi_pi_step_q16's 84 (M0+, -fstack-usage); init uses
+ * 296. Code 2000 bytes (M0+). canfdi_ctrl_dcm_init: two canfdi_pi_init and
  * three divisions (init time only). Memory: sizeof(canfdi_ctrl_dcm_t) =
  * 312 bytes on a 32-bit target, caller-owned; no heap, no globals.
  */

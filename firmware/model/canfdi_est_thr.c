@@ -209,6 +209,92 @@ void canfdi_est_thr_reset(canfdi_est_thr_t *e, bool keep_theta)
   canfdi_count_inc(&e->diag.resets);
 }
 
+/* Friction sign s (Q16.16: +1, -1, or 0 inside the dead band) from the
+ * filtered velocity of the previous step, and the motion state: moving
+ * counts the steps in one direction beyond the band. */
+static int32_t est_thr_motion(canfdi_est_thr_t *e)
+{
+  const int32_t v = canfdi_svf_dy_q16(&e->svf_a);
+  int32_t s = 0;
+  int8_t dir;
+  if (v > e->cfg.sign_band_q16) {
+    s = CANFDI_Q16_ONE;
+  } else if (v < -e->cfg.sign_band_q16) {
+    s = -CANFDI_Q16_ONE;
+  } else {
+    /* inside the dead band: unknown, 0 */
+  }
+  dir = (s > 0) ? (int8_t)1 : ((s < 0) ? (int8_t)-1 : (int8_t)0);
+  if ((dir == 0) || (dir != e->last_dir)) {
+    e->moving = 0U;
+  } else if (e->moving < UINT16_MAX) {
+    e->moving = (uint16_t)(e->moving + 1U);
+  } else {
+    /* saturated counter */
+  }
+  e->last_dir = dir;
+  return s;
+}
+
+/* since_clip: steps since the last current sample at or beyond i_limit. */
+static void est_thr_clip(canfdi_est_thr_t *e, int32_t i_q16)
+{
+  if ((e->cfg.i_limit_q16 > 0) && ((i_q16 >= e->cfg.i_limit_q16) || (i_q16 <= -e->cfg.i_limit_q16))) {
+    e->since_clip = 0U;
+  } else if (e->since_clip < UINT16_MAX) {
+    e->since_clip = (uint16_t)(e->since_clip + 1U);
+  } else {
+    /* saturated counter */
+  }
+}
+
+/* The electrical update (phase 0), skipped during the clip hold-off. */
+static void est_thr_el_update(canfdi_est_thr_t *e)
+{
+  if (e->since_clip < e->cfg.holdoff_steps) {
+    canfdi_count_inc(&e->diag.clip_skips);
+  } else {
+    int32_t phi[4];
+    const int32_t y = canfdi_add_s32_sat(canfdi_svf_y_q16(&e->svf_u),
+                                         canfdi_mul_s32_qn(canfdi_svf_dy_q16(&e->svf_u), HALF_T_Q31, 31U));
+    phi[0] = canfdi_svf_y_q16(&e->svf_i);
+    phi[1] = canfdi_svf_dy_q16(&e->svf_i);
+    phi[2] = canfdi_svf_dy_q16(&e->svf_a);
+    phi[3] = CANFDI_Q16_ONE;
+    if (canfdi_rls_update(&e->el, phi, y)) {
+      e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&e->diag.el_updates);
+    }
+  }
+}
+
+/* The mechanical update and the fast test (phase 1), behind the validity
+ * gates of the header: clip hold-off, limp-home band, steady motion. */
+static void est_thr_mech_update(canfdi_est_thr_t *e)
+{
+  const int32_t a = canfdi_svf_y_q16(&e->svf_a);
+  if (e->since_clip < e->cfg.holdoff_steps) {
+    canfdi_count_inc(&e->diag.clip_skips);
+  } else if (a <= canfdi_add_s32_sat(e->cfg.limp_home_q16, e->cfg.limp_band_q16)) {
+    canfdi_count_inc(&e->diag.mech_lh_skips);
+  } else if (e->moving < e->cfg.holdoff_steps) {
+    canfdi_count_inc(&e->diag.mech_still_skips);
+  } else {
+    int32_t phi[5];
+    fast_update(e, canfdi_svf_y_q16(&e->svf_i), a, canfdi_svf_dy_q16(&e->svf_a), canfdi_svf_d2y_q16(&e->svf_a),
+                canfdi_svf_y_q16(&e->svf_s));
+    phi[0] = canfdi_svf_d2y_q16(&e->svf_a);
+    phi[1] = canfdi_svf_dy_q16(&e->svf_a);
+    phi[2] = a;
+    phi[3] = CANFDI_Q16_ONE;
+    phi[4] = canfdi_svf_y_q16(&e->svf_s);
+    if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
+      e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&e->diag.mech_updates);
+    }
+  }
+}
+
 void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16)
 {
   CANFDI_ASSERT(e != NULL);
@@ -219,34 +305,8 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
     canfdi_svf_reset(&e->svf_s, 0);
     e->started = true;
   } else {
-    /* friction sign from the velocity of the previous step */
-    const int32_t v = canfdi_svf_dy_q16(&e->svf_a);
-    int32_t s = 0;
-    if (v > e->cfg.sign_band_q16) {
-      s = CANFDI_Q16_ONE;
-    } else if (v < -e->cfg.sign_band_q16) {
-      s = -CANFDI_Q16_ONE;
-    } else {
-      /* inside the dead band: unknown, 0 */
-    }
-    {
-      const int8_t dir = (s > 0) ? (int8_t)1 : ((s < 0) ? (int8_t)-1 : (int8_t)0);
-      if ((dir == 0) || (dir != e->last_dir)) {
-        e->moving = 0U;
-      } else if (e->moving < UINT16_MAX) {
-        e->moving = (uint16_t)(e->moving + 1U);
-      } else {
-        /* saturated counter */
-      }
-      e->last_dir = dir;
-    }
-    if ((e->cfg.i_limit_q16 > 0) && ((i_q16 >= e->cfg.i_limit_q16) || (i_q16 <= -e->cfg.i_limit_q16))) {
-      e->since_clip = 0U;
-    } else if (e->since_clip < UINT16_MAX) {
-      e->since_clip = (uint16_t)(e->since_clip + 1U);
-    } else {
-      /* saturated counter */
-    }
+    const int32_t s = est_thr_motion(e);
+    est_thr_clip(e, i_q16);
     canfdi_svf_step(&e->svf_u, u_q16);
     canfdi_svf_step(&e->svf_i, i_q16);
     canfdi_svf_step(&e->svf_a, angle_q16);
@@ -256,43 +316,12 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
     if (e->phase >= e->cfg.decim) {
       e->phase = 0U;
     }
-    if ((e->phase == 0U) && (e->since_clip < e->cfg.holdoff_steps)) {
-      canfdi_count_inc(&e->diag.clip_skips);
-    } else if (e->phase == 0U) {
-      int32_t phi[4];
-      const int32_t y = canfdi_add_s32_sat(canfdi_svf_y_q16(&e->svf_u),
-                                           canfdi_mul_s32_qn(canfdi_svf_dy_q16(&e->svf_u), HALF_T_Q31, 31U));
-      phi[0] = canfdi_svf_y_q16(&e->svf_i);
-      phi[1] = canfdi_svf_dy_q16(&e->svf_i);
-      phi[2] = canfdi_svf_dy_q16(&e->svf_a);
-      phi[3] = CANFDI_Q16_ONE;
-      if (canfdi_rls_update(&e->el, phi, y)) {
-        e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
-        canfdi_count_inc(&e->diag.el_updates);
-      }
+    if (e->phase == 0U) {
+      est_thr_el_update(e);
     }
+    /* the mechanical update one step later (same step when decim == 1) */
     if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
-      const int32_t a = canfdi_svf_y_q16(&e->svf_a);
-      if (e->since_clip < e->cfg.holdoff_steps) {
-        canfdi_count_inc(&e->diag.clip_skips);
-      } else if (a <= canfdi_add_s32_sat(e->cfg.limp_home_q16, e->cfg.limp_band_q16)) {
-        canfdi_count_inc(&e->diag.mech_lh_skips);
-      } else if (e->moving < e->cfg.holdoff_steps) {
-        canfdi_count_inc(&e->diag.mech_still_skips);
-      } else {
-        int32_t phi[5];
-        fast_update(e, canfdi_svf_y_q16(&e->svf_i), a, canfdi_svf_dy_q16(&e->svf_a),
-                    canfdi_svf_d2y_q16(&e->svf_a), canfdi_svf_y_q16(&e->svf_s));
-        phi[0] = canfdi_svf_d2y_q16(&e->svf_a);
-        phi[1] = canfdi_svf_dy_q16(&e->svf_a);
-        phi[2] = a;
-        phi[3] = CANFDI_Q16_ONE;
-        phi[4] = canfdi_svf_y_q16(&e->svf_s);
-        if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
-          e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
-          canfdi_count_inc(&e->diag.mech_updates);
-        }
-      }
+      est_thr_mech_update(e);
     }
   }
   e->has_run = true;
