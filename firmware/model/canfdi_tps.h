@@ -1,9 +1,10 @@
 /*
  * canfdi_tps.h — the characteristic of one throttle-position potentiometer
  * (TPS): the straight line from the valve angle to the sensor's output
- * voltage, and its inverse. The one calibration of that line; every module
- * that turns a TPS voltage into an angle uses it (the plant and its
- * datasheet figures: docs/design.md).
+ * voltage, and its inverse: the calibration of that line as one struct, for
+ * every module that converts TPS voltages (canfdi_parity_thr holds the pair
+ * in its configuration; the plant and its datasheet figures:
+ * docs/design.md).
  *
  *   V(theta) = zero + slope * theta          theta = (V - zero) / slope
  *
@@ -27,8 +28,8 @@
  * no result saturates (|theta| <= 50 rad). Precision: 1 / |slope| in Q8.24
  * is exact to 2^-25 rad/V, a relative error below 3e-7 for |slope| <= 10
  * V/rad (below 8e-8 for the default 2.55 V/rad): over the 4 V span of the
- * default line below 1.2e-7 rad, far under the 1.5e-5 rad LSB, so the angle
- * is the exactly rounded value of the prepared line within 1 LSB.
+ * default line below 1.2e-7 rad, far under the 1.5e-5 rad LSB: the angle
+ * is within 1 LSB of the exact (V - zero) / slope.
  * Conversion angle -> voltage (canfdi_tps_rad_to_V_q16): zero + slope *
  * theta, the product rounded half up to Q16.16 and saturated, the sum
  * saturating.
