@@ -23,7 +23,7 @@
  * does not first ramp back through speeds the motor never reached.
  * Excitation (canfdi_excite) enters after the limiter, unfiltered.
  *
- * Why a current loop. With the design brief's numbers the electrical time
+ * Why a current loop. With the motor of docs/design.md the electrical time
  * constant L/R = 6.82 mH / 1.52 Ohm = 4.5 ms is 4.5 steps at 1 ms, so a
  * current loop of ~500 rad/s bandwidth (time constant 2 ms, phase lost to
  * the sample-and-hold 500 rad/s x 0.5 ms = 14 deg) is feasible. It buys
@@ -79,13 +79,14 @@
  * Cost per canfdi_ctrl_dcm_step: two canfdi_pi_step_q16 (both PI, no D),
  * 2 32x32->64 multiplies for the feed-forward, compares; no division.
  * Measured executed instructions (arm-none-eabi-gcc 12 -Os, QEMU
- * mps2-an386 -icount; 4000 calls with random inputs, min / mean / max, the
- * M0+ code run on the emulated M4 as instruction counts):
+ * mps2-an386 -icount, SysTick; default cal, 4000 calls with setpoint and
+ * speed uniformly random in +-200 rad/s, I_A in +-20 A, 48 V supply; min /
+ * mean / max, the M0+ code run on the emulated M4 as instruction counts):
  *                                  Cortex-M4          Cortex-M0+
- *   RUN with the current loop      614 / 638 / 676    1104 / 1146 / 1196
- *   other modes, no valid I_A      121 / 442 / 733     162 /  797 / 1275
- * Stack 96 bytes + canfdi_pi_step_q16's 84 (M0+, -fstack-usage); init uses
- * 296. Code 1932 bytes (M0+). canfdi_ctrl_dcm_init: two canfdi_pi_init and
+ *   RUN with the current loop      628 / 683 / 734    1135 / 1212 / 1281
+ *   all modes at random, no I_A    140 / 450 / 631     176 /  818 / 1172
+ * Stack 88 bytes + canfdi_pi_step_q16's 84 (M0+, -fstack-usage); init uses
+ * 296. Code 2000 bytes (M0+). canfdi_ctrl_dcm_init: two canfdi_pi_init and
  * three divisions (init time only). Memory: sizeof(canfdi_ctrl_dcm_t) =
  * 312 bytes on a 32-bit target, caller-owned; no heap, no globals.
  */
@@ -134,7 +135,10 @@ typedef struct {
   int32_t u_sat;               /* +1/-1: U_A limited high/low this step, else 0 */
 } canfdi_ctrl_dcm_out_t;
 
-/* Monotone counters (the PIs keep their own, canfdi_ctrl_dcm_pi_diag). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. The PIs keep their own
+ * (canfdi_ctrl_dcm_pi_diag). */
 typedef struct {
   uint32_t steps;           /* canfdi_ctrl_dcm_step calls */
   uint32_t rate_limited;    /* steps whose setpoint was rate limited */
@@ -159,7 +163,7 @@ typedef struct {
 } canfdi_ctrl_dcm_t;
 
 /*
- * The nominal calibration for the design brief's motor (R_A 1.52 Ohm warm,
+ * The nominal calibration for the motor of docs/design.md (R_A 1.52 Ohm warm,
  * Psi 0.33 V s, L_A 6.82 mH, J 1.92e-3 kg m^2) with the gains derived in
  * the header comment, ia_max 20 A, u_max 48 V, speed_max 350 rad/s,
  * accel_max 2000 rad/s^2 (the drive's reach at ia_max under nominal load is

@@ -3,36 +3,32 @@
  */
 #include "ctrl/canfdi_ctrl_thr.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-/* num/den as a Q16.16 compile-time constant. */
-#define THR_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_SAT_((num), (den), 16, INT32_MIN, INT32_MAX))
-/* num/den degrees in rad, Q16.16, with pi ~ 355/113 (relative error 8e-8,
- * far below the Q16.16 LSB for angles up to 180 deg). */
-#define THR_DEG_Q16(num, den) THR_Q16((int64_t)(num) * 355, (int64_t)(den) * 113 * 180)
+#include "core/canfdi_qconst.h"
 
 void canfdi_ctrl_thr_cal_default(canfdi_ctrl_thr_cal_t *cal)
 {
-  cal->r_ohm_q16 = THR_Q16(15, 10);
-  cal->k_Nm_A_q16 = THR_Q16(383, 1000);
-  cal->spring_Nm_rad_q16 = THR_Q16(87, 1000);
-  cal->pretension_Nm_q16 = THR_Q16(396, 1000);
-  cal->friction_Nm_q16 = THR_Q16(284, 1000);
-  cal->b_Nms_q16 = THR_Q16(88, 10000);
-  cal->limp_home_rad_q16 = THR_DEG_Q16(65, 10);
-  cal->pretension_band_rad_q16 = THR_DEG_Q16(1, 10);
-  cal->friction_deadband_rad_q16 = THR_DEG_Q16(2, 10);
+  cal->r_ohm_q16 = CANFDI_Q16_MILLI(1500);
+  cal->k_Nm_A_q16 = CANFDI_Q16_MILLI(383);
+  cal->spring_Nm_rad_q16 = CANFDI_Q16_MILLI(87);
+  cal->pretension_Nm_q16 = CANFDI_Q16_MILLI(396);
+  cal->friction_Nm_q16 = CANFDI_Q16_MILLI(284);
+  cal->b_Nms_q16 = CANFDI_Q16(88, 10000);
+  cal->limp_home_rad_q16 = CANFDI_Q16_DEG(65, 10);
+  cal->pretension_band_rad_q16 = CANFDI_Q16_DEG(1, 10);
+  cal->friction_deadband_rad_q16 = CANFDI_Q16_DEG(2, 10);
   cal->spring_comp = true;
   cal->friction_comp = true;
   cal->velocity_ff = true;
-  cal->kp_V_rad_q16 = THR_Q16(356, 1);
-  cal->ki_V_rad_s_q16 = THR_Q16(3000, 1);
-  cal->kd_V_s_rad_q16 = THR_Q16(255, 100);
+  cal->kp_V_rad_q16 = CANFDI_Q16(356, 1);
+  cal->ki_V_rad_s_q16 = CANFDI_Q16(3000, 1);
+  cal->kd_V_s_rad_q16 = CANFDI_Q16_MILLI(2550);
   cal->kd_tau_us = 2000U;
-  cal->i_band_rad_q16 = THR_DEG_Q16(1, 1);
-  cal->angle_min_rad_q16 = THR_DEG_Q16(5, 10);
-  cal->angle_max_rad_q16 = THR_DEG_Q16(88, 1);
-  cal->u_max_V_q16 = THR_Q16(16, 1);
+  cal->i_band_rad_q16 = CANFDI_Q16_DEG(1, 1);
+  cal->angle_min_rad_q16 = CANFDI_Q16_DEG(5, 10);
+  cal->angle_max_rad_q16 = CANFDI_Q16_DEG(88, 1);
+  cal->u_max_V_q16 = CANFDI_Q16(16, 1);
   cal->rate_max_rad_s_q16 = 0;
 }
 
@@ -147,11 +143,11 @@ static int32_t thr_rate_limit(canfdi_ctrl_thr_t *c, int32_t ref_q16)
   if ((c->dref_max_q16 > 0) && (d > c->dref_max_q16)) {
     c->ref_lim_q16 = canfdi_add_s32_sat(c->ref_lim_q16, c->dref_max_q16);
     dir = 1;
-    c->diag.rate_limited++;
+    canfdi_count_inc(&c->diag.rate_limited);
   } else if ((c->dref_max_q16 > 0) && (d < -c->dref_max_q16)) {
     c->ref_lim_q16 = canfdi_sub_s32_sat(c->ref_lim_q16, c->dref_max_q16);
     dir = -1;
-    c->diag.rate_limited++;
+    canfdi_count_inc(&c->diag.rate_limited);
   } else {
     c->ref_lim_q16 = ref_q16;
   }
@@ -174,7 +170,7 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
   c->out.u_limit_V_q16 = lim;
   if ((ref > cal->angle_max_rad_q16) || (ref < cal->angle_min_rad_q16)) {
     ref = canfdi_clamp_s32(ref, cal->angle_min_rad_q16, cal->angle_max_rad_q16);
-    c->diag.ref_clamped++;
+    canfdi_count_inc(&c->diag.ref_clamped);
   }
   if (!c->ref_primed) {
     c->ref_lim_q16 = th_lim; /* a rate-limited start moves from where it is */
@@ -188,7 +184,7 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
     c->out.angle_ref_rad_q16 = th_lim;
     c->out.u_sat = 0;
     u = 0;
-    c->diag.off_steps++;
+    canfdi_count_inc(&c->diag.off_steps);
   } else {
     const int32_t dir = thr_rate_limit(c, ref);
     const int32_t r = canfdi_add_s32_sat(c->ref_lim_q16, in->excite_rad_q16);
@@ -202,7 +198,7 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
       c->out.u_sat = 0;
     }
     if (c->out.u_sat != 0) {
-      c->diag.u_limited++;
+      canfdi_count_inc(&c->diag.u_limited);
     }
     if ((mode == CANFDI_CTRL_FREEZE) || (mode == CANFDI_CTRL_TRACK)) {
       const int32_t u_app = (mode == CANFDI_CTRL_FREEZE) ? c->out.u_V_q16 : in->u_track_V_q16;
@@ -210,13 +206,13 @@ int32_t canfdi_ctrl_thr_step(canfdi_ctrl_thr_t *c, const canfdi_ctrl_thr_in_t *i
       c->ref_lim_q16 = th_lim;
       u = u_app;
       c->out.u_sat = 0;
-      c->diag.held_steps++;
+      canfdi_count_inc(&c->diag.held_steps);
     }
     c->out.u_ff_V_q16 = u_ff;
     c->out.angle_ref_rad_q16 = r;
   }
   c->out.u_V_q16 = u;
-  c->diag.steps++;
+  canfdi_count_inc(&c->diag.steps);
   if (out != NULL) {
     *out = c->out;
   }

@@ -44,10 +44,9 @@
  * 2.55 V s/rad, and ki = J w0^3 R/K = 14.2 kV/(rad s) — reduced to
  * 3 kV/(rad s) with a 1 deg band, because near the target the loop is not
  * linear (Coulomb friction: a high ki turns stick-slip into "hunting") and
- * the integrator only needs to remove the compensation's residual (tuning
- * runs against the simulator: 3 kV with a 3 deg band took twice as long to
- * settle to +-0.1 deg, 6 kV was not better). Derivative
- * filter 2 ms. J and L enter only here (the cal struct carries what the
+ * the integrator only needs to remove the compensation's residual (against
+ * the simulator, 3 kV with a 3 deg band takes twice as long to settle to
+ * +-0.1 deg, and 6 kV is not better). Derivative filter 2 ms. J and L enter only here (the cal struct carries what the
  * control law uses).
  * Measured against the host_sim valve (tests/unit/test_ctrl_thr.c, sensor
  * noise as in nominal.scn, three seeds): 10 -> 80 deg settles within
@@ -75,10 +74,13 @@
  *
  * Cost per canfdi_ctrl_thr_step: one canfdi_pi_step_q16 with D, 3 32x32->64
  * multiplies for the feed-forward, compares; no division. Measured executed
- * instructions (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, 4000
- * calls, all modes, min / mean / max): Cortex-M4 85 / 464 / 518,
- * Cortex-M0+ code 117 / 975 / 1078 (the minimum is OFF). Stack 64 bytes +
- * canfdi_pi_step_q16's 84 (M0+). Code 1978 bytes (M0+). init: two
+ * instructions (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick;
+ * default cal, 4000 calls with setpoint and angle uniformly random in
+ * 0 .. 1.5 rad, 12 V supply; min / mean / max): RUN Cortex-M4
+ * 443 / 484 / 534, Cortex-M0+ code 948 / 1003 / 1106; all four modes at
+ * random Cortex-M4 102 / 403 / 580, Cortex-M0+ code 131 / 797 / 1160 (the
+ * minimum is OFF). Stack 64 bytes + canfdi_pi_step_q16's 84 (M0+). Code
+ * 1974 bytes (M0+). init: two
  * canfdi_div_s32_qn, one 64-bit division and canfdi_pi_init (init time
  * only). Memory: sizeof(canfdi_ctrl_thr_t) = 240 bytes on a 32-bit target,
  * caller-owned; no heap, no globals.
@@ -93,7 +95,7 @@
 /* Calibration: nominal valve (shaft-referred), compensation, gains, limits.
  * Q16.16 in SI units unless the name says otherwise. */
 typedef struct {
-  /* nominal plant (design brief, Bosch DV-E5 class) */
+  /* nominal plant (docs/design.md, Bosch DV-E5 class) */
   int32_t r_ohm_q16;                 /* motor circuit resistance R, > 0 */
   int32_t k_Nm_A_q16;                /* motor constant K (= back-EMF V s/rad), > 0 */
   int32_t spring_Nm_rad_q16;         /* return spring k_s, >= 0 */
@@ -138,7 +140,10 @@ typedef struct {
   int32_t u_sat;               /* +1/-1: limited high/low this step, else 0 */
 } canfdi_ctrl_thr_out_t;
 
-/* Monotone counters (the PID keeps its own, canfdi_ctrl_thr_pi_diag). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. The PID keeps its own
+ * (canfdi_ctrl_thr_pi_diag). */
 typedef struct {
   uint32_t steps;        /* canfdi_ctrl_thr_step calls */
   uint32_t ref_clamped;  /* setpoints outside [angle_min, angle_max] */
@@ -162,7 +167,7 @@ typedef struct {
 } canfdi_ctrl_thr_t;
 
 /*
- * The nominal calibration: the design brief's valve (K 0.383, R 1.5,
+ * The nominal calibration: the valve of docs/design.md (K 0.383, R 1.5,
  * B 0.0088, spring 0.087, pretension 0.396, friction 0.284, limp-home
  * 6.5 deg; J 0.0021 and L 1.5 mH enter through the gains, see above),
  * pretension band 0.1 deg, friction dead band 0.2 deg, both compensations

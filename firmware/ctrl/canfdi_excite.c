@@ -3,6 +3,7 @@
  */
 #include "ctrl/canfdi_excite.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 #define EXC_LFSR_MASK 0x7FFFU
@@ -103,7 +104,7 @@ int32_t canfdi_excite_step_q16(canfdi_excite_t *e)
      * is this bit's value. */
     e->prbs_on = e->want && (e->cfg.prbs_amp_q16 > 0);
     e->lfsr = exc_lfsr_next(e->lfsr);
-    e->diag.prbs_bits++;
+    canfdi_count_inc(&e->diag.prbs_bits);
   }
   e->bit_count++;
   if (e->bit_count >= e->bit_steps) {
@@ -124,10 +125,10 @@ int32_t canfdi_excite_step_q16(canfdi_excite_t *e)
 
   y = canfdi_add_s32_sat(y, prbs);
   if (e->prbs_on || e->sine_on) {
-    e->diag.active_steps++;
+    canfdi_count_inc(&e->diag.active_steps);
   }
   e->out_q16 = y;
-  e->diag.steps++;
+  canfdi_count_inc(&e->diag.steps);
   return y;
 }
 

@@ -58,8 +58,8 @@
  * update once per bit, one table interpolation (one 32-bit multiply) and
  * one 32x32->64 multiply for the sine; no division. Measured executed
  * instructions (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, 4000
- * calls with PRBS and sine on, min / mean / max): Cortex-M4 74 / 81 / 102,
- * Cortex-M0+ code 150 / 162 / 188. Stack 32 bytes. Code 764 bytes (M0+)
+ * calls with PRBS and sine on, min / mean / max): Cortex-M4 78 / 86 / 109,
+ * Cortex-M0+ code 155 / 167 / 194. Stack 32 bytes. Code 776 bytes (M0+)
  * including the 130-byte constant table. Memory: sizeof(canfdi_excite_t) =
  * 60 bytes on a 32-bit target, caller-owned. No heap, no globals besides
  * the constant table.
@@ -77,7 +77,9 @@ typedef struct {
   uint32_t sine_period_us;  /* >= 2 steps when sine_amp > 0 */
 } canfdi_excite_cfg_t;
 
-/* Monotone counters. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;        /* canfdi_excite_step_q16 calls */
   uint32_t prbs_bits;    /* PRBS bits clocked */
@@ -87,9 +89,10 @@ typedef struct {
 typedef struct {
   canfdi_excite_cfg_t cfg;
   uint32_t bit_steps;    /* steps per PRBS bit */
-  uint32_t bit_count;    /* steps into the current bit */
+  uint32_t bit_count;    /* steps into the current bit, 0 .. bit_steps - 1 */
   uint32_t phase_inc;    /* sine phase per step, 2^32 = one period */
-  uint32_t phase;        /* sine phase of the next sample */
+  uint32_t phase;        /* sine phase of the next sample (wraps modulo 2^32
+                            by design: one period) */
   uint16_t lfsr;         /* LFSR state, 1..0x7FFF */
   bool want;             /* requested enable */
   bool prbs_on;          /* PRBS gate (switches at bit edges) */

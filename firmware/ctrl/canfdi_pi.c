@@ -3,6 +3,7 @@
  */
 #include "ctrl/canfdi_pi.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 #define PI_US_PER_S 1000000U
@@ -161,7 +162,7 @@ int32_t canfdi_pi_step_q16(canfdi_pi_t *pi, int32_t ref_q16, int32_t meas_q16, i
   i_new = canfdi_add_s64_sat(pi->i_q32, inc);
   if (pi_reject(pi, inc, canfdi_add_s64_sat(pi->pdf_q32, i_new), hold)) {
     i_new = pi->i_q32;
-    pi->diag.int_holds++;
+    canfdi_count_inc(&pi->diag.int_holds);
   }
   if (pi->anti_windup == CANFDI_PI_AW_CLAMP) {
     /* I alone must not exceed the limits on top of ff: I in
@@ -189,16 +190,16 @@ int32_t canfdi_pi_step_q16(canfdi_pi_t *pi, int32_t ref_q16, int32_t meas_q16, i
   if (u_q16 > pi->out_max_q16) {
     u_q16 = pi->out_max_q16;
     pi->sat = 1;
-    pi->diag.sat_hi++;
+    canfdi_count_inc(&pi->diag.sat_hi);
   } else if (u_q16 < pi->out_min_q16) {
     u_q16 = pi->out_min_q16;
     pi->sat = -1;
-    pi->diag.sat_lo++;
+    canfdi_count_inc(&pi->diag.sat_lo);
   } else {
     /* inside the limits */
   }
   pi->out_q16 = u_q16;
-  pi->diag.steps++;
+  canfdi_count_inc(&pi->diag.steps);
   return u_q16;
 }
 
@@ -206,13 +207,13 @@ void canfdi_pi_track_q16(canfdi_pi_t *pi, int32_t u_applied_q16)
 {
   pi->i_q32 = canfdi_sub_s64_sat(pi_q16_to_q32(u_applied_q16), pi->pdf_q32);
   pi->out_q16 = u_applied_q16;
-  pi->diag.tracks++;
+  canfdi_count_inc(&pi->diag.tracks);
 }
 
 void canfdi_pi_reset_q16(canfdi_pi_t *pi, int32_t u0_q16, int32_t meas0_q16)
 {
   pi_restart(pi, u0_q16, meas0_q16);
-  pi->diag.resets++;
+  canfdi_count_inc(&pi->diag.resets);
 }
 
 int32_t canfdi_pi_out_q16(const canfdi_pi_t *pi)

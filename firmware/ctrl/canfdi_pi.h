@@ -77,15 +77,17 @@
  * Cost of canfdi_pi_step_q16: straight-line code with 2 (PI) or 5 (PID)
  * 32x32->64 multiplies (__aeabi_lmul on M0+) and ~8 saturating 64-bit
  * additions; no division. Measured executed instructions (arm-none-eabi-gcc
- * 12 -Os, QEMU mps2-an386 -icount, SysTick; 4000 random calls each,
- * min / mean / max incl. call overhead; the M0+ code runs on the emulated
- * M4, so these are instruction counts, not cycles):
+ * 12 -Os, QEMU mps2-an386 -icount, SysTick; 4000 calls each with reference
+ * and measurement uniformly random in +-20 and feed-forward in +-1, limits
+ * +-10, kp 1, ki 100 /s (PID: kd 0.01 s, filter 2 ms, band 1); min / mean
+ * / max incl. call overhead; the M0+ code runs on the emulated M4, so these
+ * are instruction counts, not cycles):
  *                      Cortex-M4          Cortex-M0+
- *   PI  (kd = 0)       216 / 235 / 246    531 / 609 / 655
- *   PID (kd, band)     232 / 275 / 304    513 / 579 / 644
+ *   PI  (kd = 0)       266 / 283 / 301    613 / 718 / 771
+ *   PID (kd, band)     288 / 314 / 362    760 / 861 / 986
  * Stack 72 bytes (+12 for canfdi_add_s64_sat), -fstack-usage, M0+.
  * canfdi_pi_init does up to four 64-bit divisions (not for the 1 ms path).
- * Code 1546 bytes (M0+, -Os). Memory: sizeof(canfdi_pi_t) = 96 bytes on a
+ * Code 1586 bytes (M0+, -Os). Memory: sizeof(canfdi_pi_t) = 96 bytes on a
  * 32-bit target (int64 alignment), caller-owned; no heap, no globals,
  * reentrant per instance.
  */
@@ -114,7 +116,9 @@ typedef struct {
   uint8_t anti_windup; /* CANFDI_PI_AW_* */
 } canfdi_pi_cfg_t;
 
-/* Monotone counters. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;     /* canfdi_pi_step_q16 calls */
   uint32_t sat_hi;    /* steps whose output was limited to out_max */

@@ -3,16 +3,13 @@
  */
 #include "detect/canfdi_adapt.h"
 
+#include "core/canfdi_count.h"
+
 CANFDI_STATIC_ASSERT((CANFDI_CFG_STEP_US >= 100U) && (CANFDI_CFG_STEP_US <= 1000000U), adapt_step_range);
 CANFDI_STATIC_ASSERT((1000000U % CANFDI_CFG_STEP_US) == 0U, adapt_step_divides_1s);
 
 #define STEPS_PER_S ((int64_t)(1000000U / CANFDI_CFG_STEP_US))
 #define FRAC 16U
-
-static uint32_t inc_sat_u32(uint32_t c)
-{
-  return (c < UINT32_MAX) ? (c + 1U) : c;
-}
 
 int32_t canfdi_adapt_cfg_check(const canfdi_adapt_cfg_t *cfg)
 {
@@ -72,7 +69,7 @@ int32_t canfdi_adapt_step(canfdi_adapt_t *a, int32_t u)
       rate = du * STEPS_PER_S;
       if (rate > INT32_MAX) {
         rate = INT32_MAX;
-        a->diag.rate_saturations = inc_sat_u32(a->diag.rate_saturations);
+        canfdi_count_inc(&a->diag.rate_saturations);
       }
       /* f and rate * 2^16 are in [0, 2^47): the difference cannot overflow
        * and a rounded step of alpha < 1 does not overshoot, so f >= 0. */
@@ -83,7 +80,7 @@ int32_t canfdi_adapt_step(canfdi_adapt_t *a, int32_t u)
         int32_t thr = canfdi_add_s32_sat(cfg->base, add);
         if (thr > cfg->max) {
           thr = cfg->max;
-          a->diag.cap_hits = inc_sat_u32(a->diag.cap_hits);
+          canfdi_count_inc(&a->diag.cap_hits);
         }
         a->threshold = thr;
       }

@@ -48,7 +48,7 @@
  * inputs): at most 408 instructions on Cortex-M0 (mean 394), 148 on
  * Cortex-M4 (mean 137). canfdi_adapt_exceeds: one 64-bit negate and
  * compare, 27 (M0) / 17 (M4) instructions. Stack: about 90 bytes worst
- * chain on M0+ (56 here + 28 in __aeabi_lmul). Code: 804 bytes (M0+).
+ * chain on M0+ (56 here + 28 in __aeabi_lmul). Code: 792 bytes (M0+).
  * RAM per instance:
  * sizeof(canfdi_adapt_t) = 40 bytes on a 32-bit ARM target (filter state 8,
  * alpha 4, previous u 4, threshold 4, flag 4, config pointer 4,
@@ -74,7 +74,9 @@ typedef struct {
   uint8_t gain_frac_bits; /* 0..62 */
 } canfdi_adapt_cfg_t;
 
-/* Monotone counters, saturating at UINT32_MAX; never cleared after init. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t rate_saturations; /* |du/dt| above INT32_MAX u-units/s */
   uint32_t cap_hits;         /* steps where the threshold was capped at max */

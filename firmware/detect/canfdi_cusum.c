@@ -4,7 +4,8 @@
  */
 #include "detect/canfdi_cusum.h"
 
-#define CUSUM_ONE_Q16 ((int64_t)1 << 16)
+#include "core/canfdi_count.h"
+#include "core/canfdi_qconst.h"
 
 /* Bound on |S| from the header's overflow argument: H <= 2^46 before a step,
  * one update < 2^49. Checked as an invariant on every step. */
@@ -57,20 +58,16 @@ int canfdi_cusum_init(canfdi_cusum_t *s, const canfdi_cusum_cfg_t *cfg)
   return out;
 }
 
-static void count_up(uint32_t *c)
-{
-  if (*c < UINT32_MAX) {
-    (*c)++;
-  }
-}
-
-/* One side: S = max(0, S + inc); N counts the consecutive non-zero steps. */
+/* One side: S = max(0, S + inc); N counts the consecutive non-zero steps
+ * (state, saturating at UINT32_MAX: see the header). */
 static void accumulate(int64_t *sum, uint32_t *n, int64_t inc)
 {
   const int64_t v = *sum + inc; /* |v| < 2^50, see header */
   if (v > 0) {
     *sum = v;
-    count_up(n);
+    if (*n < UINT32_MAX) {
+      *n += 1U;
+    }
   } else {
     *sum = 0;
     *n = 0U;
@@ -92,9 +89,9 @@ static void record_alarm(canfdi_cusum_t *s, uint32_t side, int64_t sum, uint32_t
   s->alarm.shift_q16 = (side == CANFDI_CUSUM_HI) ? shift : -shift;
   s->alarm.sum_q16 = sum;
   if (side == CANFDI_CUSUM_HI) {
-    count_up(&s->diag.alarms_hi);
+    canfdi_count_inc(&s->diag.alarms_hi);
   } else {
-    count_up(&s->diag.alarms_lo);
+    canfdi_count_inc(&s->diag.alarms_lo);
   }
 }
 
@@ -104,10 +101,10 @@ uint32_t canfdi_cusum_step(canfdi_cusum_t *s, int32_t x)
   uint32_t side = CANFDI_CUSUM_NONE;
   s->step++; /* wraps by design */
   if (s->latched) {
-    count_up(&s->diag.latched_samples);
+    canfdi_count_inc(&s->diag.latched_samples);
   } else {
     /* e*2^16 by multiplication: exact (|e| < 2^32) and defined for e < 0. */
-    const int64_t e_q16 = ((int64_t)x - (int64_t)s->mu0) * CUSUM_ONE_Q16;
+    const int64_t e_q16 = ((int64_t)x - (int64_t)s->mu0) * (int64_t)CANFDI_Q16_ONE;
     accumulate(&s->s_hi_q16, &s->n_hi, e_q16 - s->k_lsb_q16);
     accumulate(&s->s_lo_q16, &s->n_lo, -e_q16 - s->k_lsb_q16);
     CANFDI_ASSERT((s->s_hi_q16 < CUSUM_S_BOUND) && (s->s_lo_q16 < CUSUM_S_BOUND));
@@ -131,7 +128,7 @@ uint32_t canfdi_cusum_step(canfdi_cusum_t *s, int32_t x)
     if (side != CANFDI_CUSUM_NONE) {
       if (s->restart == (uint8_t)CANFDI_CUSUM_RESTART_AUTO) {
         rearm(s);
-        count_up(&s->diag.restarts);
+        canfdi_count_inc(&s->diag.restarts);
       } else {
         s->latched = true;
       }
@@ -144,7 +141,7 @@ void canfdi_cusum_restart(canfdi_cusum_t *s)
 {
   CANFDI_ASSERT(s != NULL);
   rearm(s);
-  count_up(&s->diag.restarts);
+  canfdi_count_inc(&s->diag.restarts);
 }
 
 bool canfdi_cusum_latched(const canfdi_cusum_t *s)

@@ -112,7 +112,8 @@ typedef struct {
   canfdi_cusum_restart_t restart; /* what happens after an alarm */
 } canfdi_cusum_cfg_t;
 
-/* What the last alarm said. Valid once diag.alarms_hi + alarms_lo > 0. */
+/* What the last alarm said. side is CANFDI_CUSUM_NONE (and the record
+ * zero) until the first alarm. */
 typedef struct {
   uint32_t side;         /* CANFDI_CUSUM_HI or CANFDI_CUSUM_LO */
   uint32_t alarm_step;   /* index of the sample that raised it */
@@ -122,7 +123,9 @@ typedef struct {
   int64_t sum_q16;       /* the alarming sum S, LSB, Q16 (> H) */
 } canfdi_cusum_alarm_t;
 
-/* Monotone counters (they only grow; init clears them). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t alarms_hi;    /* alarms on the upper sum */
   uint32_t alarms_lo;    /* alarms on the lower sum */
@@ -139,9 +142,10 @@ typedef struct {
   int64_t s_lo_q16;      /* lower sum, LSB, Q16, 0 <= S_lo */
   canfdi_cusum_alarm_t alarm;
   int32_t mu0;
-  uint32_t n_hi;
-  uint32_t n_lo;
-  uint32_t step;         /* index of the last sample (wraps) */
+  uint32_t n_hi;         /* N_hi: consecutive non-zero steps of S_hi,
+                          * saturating at UINT32_MAX */
+  uint32_t n_lo;         /* N_lo, likewise */
+  uint32_t step;         /* index of the last sample (wraps by design) */
   canfdi_cusum_diag_t diag;
   uint8_t restart;       /* canfdi_cusum_restart_t */
   bool latched;

@@ -3,10 +3,7 @@
  */
 #include "detect/canfdi_limit.h"
 
-static uint32_t inc_sat_u32(uint32_t c)
-{
-  return (c < UINT32_MAX) ? (c + 1U) : c;
-}
+#include "core/canfdi_count.h"
 
 int32_t canfdi_limit_cfg_check(const canfdi_limit_cfg_t *cfg)
 {
@@ -71,19 +68,19 @@ int32_t canfdi_limit_step(canfdi_limit_t *l, int32_t x)
     if (above) {
       s = CANFDI_LIMIT_ABOVE_MAX;
       if (l->symptom != (uint8_t)CANFDI_LIMIT_ABOVE_MAX) {
-        l->diag.above_events = inc_sat_u32(l->diag.above_events);
+        canfdi_count_inc(&l->diag.above_events);
       }
     } else if (below) {
       s = CANFDI_LIMIT_BELOW_MIN;
       if (l->symptom != (uint8_t)CANFDI_LIMIT_BELOW_MIN) {
-        l->diag.below_events = inc_sat_u32(l->diag.below_events);
+        canfdi_count_inc(&l->diag.below_events);
       }
     } else {
       s = CANFDI_LIMIT_IN_BAND;
     }
     l->symptom = (uint8_t)s;
     if (s != CANFDI_LIMIT_IN_BAND) {
-      l->diag.steps_violated = inc_sat_u32(l->diag.steps_violated);
+      canfdi_count_inc(&l->diag.steps_violated);
     }
     out = canfdi_debounce_step(&l->deb, (s == CANFDI_LIMIT_IN_BAND) ? CANFDI_DEB_REPORT_PREPASSED
                                                                     : CANFDI_DEB_REPORT_PREFAILED);

@@ -37,7 +37,7 @@
  * QEMU -icount, 2000 calls incl. full-scale inputs), debouncing included:
  * at most 109 instructions on Cortex-M0 (mean 95), 86 on Cortex-M4 (mean
  * 74). Stack: 32 bytes worst chain (16 here + 16 in canfdi_debounce_step;
- * -fstack-usage, M0+). Code: 402 bytes (M0+) plus the debouncer.
+ * -fstack-usage, M0+). Code: 400 bytes (M0+) plus the debouncer.
  * RAM per instance: sizeof(canfdi_limit_t) = 36 bytes on a 32-bit target
  * (config pointer 4, debouncer 16, symptom state 4, counters 12); the
  * configuration (32 bytes) is caller-owned, normally const.
@@ -69,7 +69,9 @@ typedef struct {
   canfdi_debounce_cfg_t deb; /* debouncing of the raw symptom */
 } canfdi_limit_cfg_t;
 
-/* Monotone counters, saturating at UINT32_MAX; never cleared after init. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t above_events; /* raw symptom entered ABOVE_MAX */
   uint32_t below_events; /* raw symptom entered BELOW_MIN */

@@ -4,8 +4,11 @@
  */
 #include "detect/canfdi_meanvar.h"
 
-/* x * 2^32 and x * 2^10 by multiplication: exact in int64_t for |x| <= 2^21,
- * and unlike a left shift defined for negative x. */
+#include "core/canfdi_count.h"
+
+/* x * 2^32 by multiplication: exact in int64_t for |x| <= 2^21, and unlike
+ * a left shift defined for negative x. A 64-bit scale factor of this module
+ * alone: core/canfdi_qconst.h holds the int32_t Q16.16 and Q8.24 constants. */
 #define MEANVAR_ONE_Q32 ((int64_t)1 << 32)
 #define MEANVAR_D_FRAC 10U  /* fraction bits of d = x - mean */
 #define MEANVAR_V_FRAC 20U  /* fraction bits of the variance, 2 * D_FRAC */
@@ -33,9 +36,7 @@ void canfdi_meanvar_reset(canfdi_meanvar_t *s)
   s->mean_q32 = 0;
   s->var_q20 = 0;
   s->n_samples = 0U;
-  if (s->diag.resets < UINT32_MAX) {
-    s->diag.resets++;
-  }
+  canfdi_count_inc(&s->diag.resets);
 }
 
 void canfdi_meanvar_step(canfdi_meanvar_t *s, int32_t x)
@@ -43,8 +44,8 @@ void canfdi_meanvar_step(canfdi_meanvar_t *s, int32_t x)
   CANFDI_ASSERT(s != NULL);
   CANFDI_ASSERT(s->alpha_q31 > 0);
   const int32_t xc = canfdi_clamp_s32(x, -CANFDI_MEANVAR_X_MAX, CANFDI_MEANVAR_X_MAX);
-  if ((xc != x) && (s->diag.input_saturations < UINT32_MAX)) {
-    s->diag.input_saturations++;
+  if (xc != x) {
+    canfdi_count_inc(&s->diag.input_saturations);
   }
   const int64_t x_q32 = (int64_t)xc * MEANVAR_ONE_Q32; /* |x_q32| <= 2^52 */
 

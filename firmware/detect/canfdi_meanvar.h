@@ -32,11 +32,11 @@
  *     difference d^2 - var lies in [-2^62, 2^62], alpha times it is rounded
  *     half up by canfdi_mul_s64_q31. var stays >= 0 for the same
  *     no-overshoot reason as the mean.
- *   (Design note: a 16-fraction-bit variance, as first sketched, leaves a
- *   dead zone of 2^-17/alpha LSB^2 = 0.08 LSB^2 at lambda = 0.9999 — as large
- *   as the variance of one LSB of quantisation noise. Using the headroom that
- *   the +-2^20 input limit leaves in 64 bits, d keeps 10 and var 20 fraction
- *   bits, which cuts the dead zone 16-fold.)
+ *   (Why 10 and 20 fraction bits: a variance with 16 fraction bits would
+ *   have a dead zone of 2^-17/alpha LSB^2 = 0.08 LSB^2 at lambda = 0.9999,
+ *   as large as the variance of one LSB of quantisation noise. The headroom
+ *   that the +-2^20 input limit leaves in 64 bits gives d 10 and var 20
+ *   fraction bits, a dead zone 16 times smaller.)
  *
  * Accuracy versus the exact recursion with the same (quantised) alpha,
  * a = alpha_q31 / 2^31, derived from the per-step rounding errors, each of
@@ -75,7 +75,9 @@
 /* Input limit in LSB: samples are saturated to +-CANFDI_MEANVAR_X_MAX. */
 #define CANFDI_MEANVAR_X_MAX ((int32_t)1 << 20)
 
-/* Monotone counters (they only grow; init clears them). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t input_saturations; /* samples clipped to +-CANFDI_MEANVAR_X_MAX */
   uint32_t resets;            /* canfdi_meanvar_reset calls */

@@ -4,17 +4,14 @@
  */
 #include "detect/canfdi_trend.h"
 
+#include "core/canfdi_count.h"
+
 /* The rate scale 10^6 / T must be an exact integer, and small enough that
  * d1 = (y1[k] - y1[k-1]) * steps_per_s stays below 2^62 (see the header). */
 CANFDI_STATIC_ASSERT((CANFDI_CFG_STEP_US >= 100U) && (CANFDI_CFG_STEP_US <= 1000000U), trend_step_range);
 CANFDI_STATIC_ASSERT((1000000U % CANFDI_CFG_STEP_US) == 0U, trend_step_divides_1s);
 
 #define STEPS_PER_S ((int64_t)(1000000U / CANFDI_CFG_STEP_US))
-
-static uint32_t inc_sat_u32(uint32_t c)
-{
-  return (c < UINT32_MAX) ? (c + 1U) : c;
-}
 
 int32_t canfdi_trend_cfg_check(const canfdi_trend_cfg_t *cfg)
 {
@@ -86,7 +83,7 @@ int32_t canfdi_trend_step(canfdi_trend_t *t, int32_t x)
       r_out = canfdi_asr64_rnd(r_q16, CANFDI_TREND_FRAC - (unsigned)cfg->rate_frac_bits);
       t->rate = canfdi_sat_s64_to_s32(r_out);
       if ((int64_t)t->rate != r_out) {
-        t->diag.rate_saturations = inc_sat_u32(t->diag.rate_saturations);
+        canfdi_count_inc(&t->diag.rate_saturations);
       }
       out = canfdi_limit_step(&t->limit, t->rate);
     }

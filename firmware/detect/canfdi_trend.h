@@ -103,7 +103,9 @@ typedef struct {
   canfdi_limit_cfg_t rate_limit; /* limits on the rate, units/s * 2^rate_frac_bits */
 } canfdi_trend_cfg_t;
 
-/* Monotone counters, saturating at UINT32_MAX; never cleared after init. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t rate_saturations; /* steps whose rate did not fit int32_t */
 } canfdi_trend_diag_t;

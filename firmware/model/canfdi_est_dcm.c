@@ -3,9 +3,9 @@
  */
 #include "model/canfdi_est_dcm.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-#define ONE_Q16 65536
+#include "core/canfdi_qconst.h"
 
 /* T / 2 in Q31 (the half-sample correction of the ZOH voltage) */
 #define HALF_T_Q31 CANFDI_Q31_RATIO(CANFDI_CFG_STEP_US, 2000000)
@@ -17,17 +17,17 @@ void canfdi_est_dcm_default_cfg(canfdi_est_dcm_cfg_t *cfg)
   cfg->svf.omega_c_rad_s = 200;
   cfg->decim = 5U;
   cfg->forget_q31 = CANFDI_Q31_RATIO(1, 100);
-  cfg->p0_q16 = 100 * ONE_Q16;
-  cfg->trace_max_q16 = 1000 * ONE_Q16;
-  cfg->excite_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 1000, 16);
+  cfg->p0_q16 = 100 * CANFDI_Q16_ONE;
+  cfg->trace_max_q16 = 1000 * CANFDI_Q16_ONE;
+  cfg->excite_min_q16 = CANFDI_Q16_MILLI(1);
   cfg->excite_shift = 6U;
   cfg->conv_updates = 400U;
-  cfg->ra_nom_q16 = (int32_t)CANFDI_QN_RATIO_(152, 100, 16);
-  cfg->la_nom_q24 = (int32_t)CANFDI_QN_RATIO_(682, 100000, 24);
-  cfg->psi_nom_q16 = (int32_t)CANFDI_QN_RATIO_(33, 100, 16);
-  cfg->j_nom_q24 = (int32_t)CANFDI_QN_RATIO_(192, 100000, 24);
-  cfg->mf1_nom_q24 = (int32_t)CANFDI_QN_RATIO_(36, 100000, 24);
-  cfg->mc_nom_q16 = (int32_t)CANFDI_QN_RATIO_(131, 100, 16);
+  cfg->ra_nom_q16 = CANFDI_Q16_MILLI(1520);
+  cfg->la_nom_q24 = CANFDI_Q24(682, 100000);
+  cfg->psi_nom_q16 = CANFDI_Q16_MILLI(330);
+  cfg->j_nom_q24 = CANFDI_Q24(192, 100000);
+  cfg->mf1_nom_q24 = CANFDI_Q24(36, 100000);
+  cfg->mc_nom_q16 = CANFDI_Q16_MILLI(1310);
   cfg->load_hold_steps = 0U;
 }
 
@@ -85,6 +85,7 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
         (canfdi_svf_init(&e->svf_l, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->arm, &ra) == CANFDI_OK) &&
         (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
       e->cfg = *cfg;
+      e->has_run = false;
       e->diag.steps = 0U;
       e->diag.arm_updates = 0U;
       e->diag.mech_updates = 0U;
@@ -113,7 +114,7 @@ void canfdi_est_dcm_reset(canfdi_est_dcm_t *e, bool keep_theta)
   /* the known load offset is an input, kept across resets */
   e->arm_since_reset = 0U;
   e->mech_since_reset = 0U;
-  e->diag.resets += 1U;
+  canfdi_count_inc(&e->diag.resets);
 }
 
 /* Psi for the mechanical conversion: the estimate once it has converged
@@ -159,12 +160,12 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       phi[2] = canfdi_svf_y_q16(&e->svf_w);
       if (canfdi_rls_update(&e->arm, phi, y)) {
         e->arm_since_reset += (e->arm_since_reset < UINT32_MAX) ? 1U : 0U;
-        e->diag.arm_updates += 1U;
+        canfdi_count_inc(&e->diag.arm_updates);
       }
     }
     /* the mechanical update one step later (same step when decim == 1) */
     if ((e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) && (e->load_hold > 0U)) {
-      e->diag.load_hold_skips += 1U;
+      canfdi_count_inc(&e->diag.load_hold_skips);
     } else if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
       int32_t phi[3];
       phi[0] = canfdi_svf_dy_q16(&e->svf_w);
@@ -176,17 +177,18 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       const int32_t y = canfdi_sub_s32_sat(
           canfdi_svf_y_q16(&e->svf_i),
           canfdi_div_s32_qn(canfdi_svf_y_q16(&e->svf_l), psi_for_mech_q16(e), 16U));
-      phi[2] = ONE_Q16;
+      phi[2] = CANFDI_Q16_ONE;
       if (canfdi_rls_update(&e->mech, phi, y)) {
         e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
-        e->diag.mech_updates += 1U;
+        canfdi_count_inc(&e->diag.mech_updates);
       }
     }
   }
   if (e->load_hold > 0U) {
     e->load_hold = (uint16_t)(e->load_hold - 1U);
   }
-  e->diag.steps += 1U;
+  e->has_run = true;
+  canfdi_count_inc(&e->diag.steps);
 }
 
 int32_t canfdi_est_dcm_ra_q16(const canfdi_est_dcm_t *e)
@@ -223,6 +225,11 @@ int32_t canfdi_est_dcm_mc_q16(const canfdi_est_dcm_t *e)
   return canfdi_add_s32_sat(
       canfdi_mul_s32_qn(psi_for_mech_q16(e), canfdi_rls_theta_qn(&e->mech, 2U, 16U), 16U),
       e->dload_q16);
+}
+
+bool canfdi_est_dcm_has_run(const canfdi_est_dcm_t *e)
+{
+  return e->has_run;
 }
 
 bool canfdi_est_dcm_excited(const canfdi_est_dcm_t *e)

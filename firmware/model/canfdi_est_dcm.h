@@ -5,7 +5,8 @@
  * mechanical equation, by two UD-RLS estimators (canfdi_rls.h) on signals
  * and derivatives from state-variable filters (canfdi_svf.h).
  *
- * Equations (Isermann, Fault-Diagnosis Systems; design brief):
+ * Equations (Isermann, Fault-Diagnosis Systems; the motor of
+ * docs/design.md):
  *   armature:    U_A = R_A I_A + L_A dI_A/dt + Psi w
  *                y = U_A,  phi = [I_A, dI_A/dt, w],  theta_a = [R_A, L_A, Psi]
  *   mechanical:  Psi I_A = J dw/dt + M_F1 w + M_F0 sign(w) + M_L
@@ -57,13 +58,14 @@
  * relative), M_c Q16.16 N m. Read-outs saturate.
  *
  * Cost per step: 4 SVF steps (order 2; the fourth filters the known load
- * offset) every step, plus one RLS update of
- * 3 parameters on two of every `decim` steps (never both in one step).
- * Measured on the host (x86-64, gcc -O2, callgrind): mean 3.9 k
- * instructions per step with decim 5; worst-case step = 3 SVF + 1 RLS
- * update ~ 0.9 k + 7.6 k = 8.5 k. Cortex-M0+ estimate ~15 k for the worst
- * step (see canfdi_rls.h). Memory: sizeof(canfdi_est_dcm_t) = 1376 bytes on a 32-bit target
- * (four SVFs and two RLS instances sized CANFDI_CFG_RLS_MAX_PARAMS).
+ * offset) every step, plus one RLS update of 3 parameters on two of every
+ * `decim` steps (never both in one step). Measured executed instructions
+ * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; default
+ * cfg, 4000 steps of an excited operating point around 100 rad/s and 4 A):
+ * Cortex-M4 mean 7 000, max 14 300 (a step with an RLS update); Cortex-M0+
+ * code mean 14 500, max 27 500. Memory: sizeof(canfdi_est_dcm_t) = 1384
+ * bytes on a 32-bit target (four SVFs and two RLS instances sized
+ * CANFDI_CFG_RLS_MAX_PARAMS).
  */
 #ifndef CANFDI_EST_DCM_H
 #define CANFDI_EST_DCM_H
@@ -101,11 +103,15 @@ typedef struct {
                              * (late load, see canfdi_est_dcm_set_load_offset) */
 } canfdi_est_dcm_cfg_t;
 
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them (canfdi_est_dcm_has_run says whether the
+ * estimator has stepped). */
 typedef struct {
-  uint32_t steps;
+  uint32_t steps;           /* canfdi_est_dcm_step calls */
   uint32_t arm_updates;   /* armature RLS updates applied */
   uint32_t mech_updates;  /* mechanical RLS updates applied */
-  uint32_t resets;
+  uint32_t resets;          /* canfdi_est_dcm_reset calls (init counts as none) */
   uint32_t load_hold_skips; /* mechanical updates skipped: late-load hold */
 } canfdi_est_dcm_diag_t;
 
@@ -117,10 +123,12 @@ typedef struct {
   canfdi_svf_t svf_l;     /* known load offset dM_L */
   canfdi_rls_t arm;
   canfdi_rls_t mech;
-  uint8_t phase;          /* step counter modulo decim */
+  uint8_t phase;          /* step counter modulo decim, 0 .. decim - 1 */
+  bool has_run;           /* stepped at least once since init (reset keeps it) */
   bool started;           /* filters reset on the first sample */
-  uint32_t arm_since_reset;
-  uint32_t mech_since_reset;
+  uint32_t arm_since_reset;  /* armature updates since init/reset (state of
+                              * `converged`), saturating at UINT32_MAX */
+  uint32_t mech_since_reset; /* mechanical updates, likewise */
   int32_t dload_q16;      /* known load offset, Q16.16 N m */
   uint16_t load_hold;     /* steps left of the late-load hold */
   canfdi_est_dcm_diag_t diag;
@@ -131,9 +139,9 @@ typedef struct {
  * (200 Hz updates), lambda 0.99 (memory 0.5 s), p0 100, trace bound 1000,
  * excitation threshold 1e-3 on the less excited of I_A and w (i.e. both a
  * current swing of ~0.25 A rms and a speed swing of ~4 rad/s rms; sensor
- * noise alone gives ~1e-5), time constant 2^6
- * updates, converged after 400 updates (2 s), nominal parameters of the
- * design brief with M_c = 0.11 + 1.2 N m.
+ * noise alone gives ~1e-5), time constant 2^6 updates, converged after
+ * 400 updates (2 s), nominal parameters of docs/design.md with
+ * M_c = 0.11 + 1.2 N m, no late-load hold (load_hold_steps 0).
  */
 void canfdi_est_dcm_default_cfg(canfdi_est_dcm_cfg_t *cfg);
 
@@ -169,6 +177,11 @@ int32_t canfdi_est_dcm_psi_q16(const canfdi_est_dcm_t *e);
 int32_t canfdi_est_dcm_j_q24(const canfdi_est_dcm_t *e);
 int32_t canfdi_est_dcm_mf1_q24(const canfdi_est_dcm_t *e);
 int32_t canfdi_est_dcm_mc_q16(const canfdi_est_dcm_t *e);
+
+/* Whether canfdi_est_dcm_step ran at least once since init (a reset does
+ * not clear it): the state a caller needs to tell a restart from the first
+ * start. O(1). */
+bool canfdi_est_dcm_has_run(const canfdi_est_dcm_t *e);
 
 /* Flags (see above): armature gate open at the last update; armature /
  * mechanical estimate converged. */

@@ -3,15 +3,13 @@
  */
 #include "model/canfdi_est_thr.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-#define ONE_Q16 65536
+#include "core/canfdi_qconst.h"
 
 /* torque bound of the fast test, N m (4x the valve's largest, K x 10 A) */
-#define FAST_TQ_MAX_Q16 (16 * ONE_Q16)
+#define FAST_TQ_MAX_Q16 (16 * CANFDI_Q16_ONE)
 #define HALF_T_Q31 CANFDI_Q31_RATIO(CANFDI_CFG_STEP_US, 2000000)
-/* pi / 180 for the degree-valued defaults */
-#define DEG_Q16(num, den) ((int32_t)CANFDI_QN_RATIO_((int64_t)(num) * 314159265, (int64_t)(den) * 18000000000LL, 16))
 
 void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
 {
@@ -21,28 +19,28 @@ void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
   cfg->decim = 2U;
   cfg->forget_q31 = CANFDI_Q31_RATIO(5, 1000);
   cfg->mech_forget_q31 = CANFDI_Q31_RATIO(5, 10000);
-  cfg->p0_q16 = 100 * ONE_Q16;
-  cfg->trace_max_q16 = 1000 * ONE_Q16;
-  cfg->excite_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 1000, 16);
+  cfg->p0_q16 = 100 * CANFDI_Q16_ONE;
+  cfg->trace_max_q16 = 1000 * CANFDI_Q16_ONE;
+  cfg->excite_min_q16 = CANFDI_Q16_MILLI(1);
   cfg->excite_shift = 6U;
   cfg->conv_updates = 1000U;
-  cfg->sign_band_q16 = (int32_t)CANFDI_QN_RATIO_(3, 10, 16);
-  cfg->limp_band_q16 = DEG_Q16(2, 1);
-  cfg->i_limit_q16 = (int32_t)CANFDI_QN_RATIO_(99, 10, 16);
+  cfg->sign_band_q16 = CANFDI_Q16_MILLI(300);
+  cfg->limp_band_q16 = CANFDI_Q16_DEG(2, 1);
+  cfg->i_limit_q16 = CANFDI_Q16_MILLI(9900);
   cfg->holdoff_steps = 40U;
-  cfg->r_nom_q16 = (int32_t)CANFDI_QN_RATIO_(15, 10, 16);
-  cfg->l_nom_q24 = (int32_t)CANFDI_QN_RATIO_(15, 10000, 24);
-  cfg->k_nom_q16 = (int32_t)CANFDI_QN_RATIO_(383, 1000, 16);
+  cfg->r_nom_q16 = CANFDI_Q16_MILLI(1500);
+  cfg->l_nom_q24 = CANFDI_Q24(15, 10000);
+  cfg->k_nom_q16 = CANFDI_Q16_MILLI(383);
   cfg->u0_nom_q16 = 0;
-  cfg->j_nom_q24 = (int32_t)CANFDI_QN_RATIO_(21, 10000, 24);
-  cfg->b_nom_q24 = (int32_t)CANFDI_QN_RATIO_(88, 10000, 24);
-  cfg->spring_nom_q24 = (int32_t)CANFDI_QN_RATIO_(87, 1000, 24);
-  cfg->pretension_nom_q16 = (int32_t)CANFDI_QN_RATIO_(396, 1000, 16);
-  cfg->friction_nom_q16 = (int32_t)CANFDI_QN_RATIO_(284, 1000, 16);
-  cfg->limp_home_q16 = DEG_Q16(65, 10);
+  cfg->j_nom_q24 = CANFDI_Q24(21, 10000);
+  cfg->b_nom_q24 = CANFDI_Q24(88, 10000);
+  cfg->spring_nom_q24 = CANFDI_Q24(87, 1000);
+  cfg->pretension_nom_q16 = CANFDI_Q16_MILLI(396);
+  cfg->friction_nom_q16 = CANFDI_Q16_MILLI(284);
+  cfg->limp_home_q16 = CANFDI_Q16_DEG(65, 10);
   cfg->fast_shift = 6U;
   cfg->fast_min_updates = 100U;
-  cfg->fast_sep_min_q16 = (int32_t)CANFDI_QN_RATIO_(1, 4, 16);
+  cfg->fast_sep_min_q16 = CANFDI_Q16_MILLI(250);
   cfg->fast_stale_steps = 500U;
 }
 
@@ -78,7 +76,7 @@ static void fast_update(canfdi_est_thr_t *e, int32_t i_q16, int32_t a_q16, int32
   e->f_sr_q32 = ew_q32(e->f_sr_q32, (int64_t)s_q16 * r_q16, sh);
   e->f_n = (e->f_n < UINT16_MAX) ? (uint16_t)(e->f_n + 1U) : e->f_n;
   e->f_age = 0U;
-  e->diag.fast_updates += 1U;
+  canfdi_count_inc(&e->diag.fast_updates);
   {
     /* Q32 -> Q24: |c|, |r| <= 16 N m, |s| <= 1: every product < 2^61 */
     const int64_t cc = canfdi_asr64_rnd(e->f_cc_q32, 8U);
@@ -141,7 +139,7 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
   if ((e != NULL) && (cfg != NULL) && (cfg->svf.order == 3U) && (cfg->decim >= 1U) && (cfg->decim <= 100U) &&
       (cfg->k_nom_q16 > 0) && (cfg->sign_band_q16 >= 0) && (cfg->limp_band_q16 >= 0) && (cfg->i_limit_q16 >= 0) &&
       (cfg->holdoff_steps >= 1U) && (cfg->holdoff_steps <= 1000U) && (cfg->fast_shift >= 1U) &&
-      (cfg->fast_shift <= 12U) && (cfg->fast_sep_min_q16 >= 0) && (cfg->fast_sep_min_q16 <= ONE_Q16)) {
+      (cfg->fast_shift <= 12U) && (cfg->fast_sep_min_q16 >= 0) && (cfg->fast_sep_min_q16 <= CANFDI_Q16_ONE)) {
     canfdi_rls_cfg_t re;
     canfdi_rls_cfg_t rm;
     rls_cfg_common(&re, cfg, 4U);
@@ -166,6 +164,7 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
         (canfdi_svf_init(&e->svf_s, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->el, &re) == CANFDI_OK) &&
         (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
       e->cfg = *cfg;
+      e->has_run = false;
       e->diag.steps = 0U;
       e->diag.el_updates = 0U;
       e->diag.mech_updates = 0U;
@@ -207,7 +206,93 @@ void canfdi_est_thr_reset(canfdi_est_thr_t *e, bool keep_theta)
   e->f_n = 0U;
   e->f_age = UINT16_MAX;
   e->f_sep = false;
-  e->diag.resets += 1U;
+  canfdi_count_inc(&e->diag.resets);
+}
+
+/* Friction sign s (Q16.16: +1, -1, or 0 inside the dead band) from the
+ * filtered velocity of the previous step, and the motion state: moving
+ * counts the steps in one direction beyond the band. */
+static int32_t est_thr_motion(canfdi_est_thr_t *e)
+{
+  const int32_t v = canfdi_svf_dy_q16(&e->svf_a);
+  int32_t s = 0;
+  int8_t dir;
+  if (v > e->cfg.sign_band_q16) {
+    s = CANFDI_Q16_ONE;
+  } else if (v < -e->cfg.sign_band_q16) {
+    s = -CANFDI_Q16_ONE;
+  } else {
+    /* inside the dead band: unknown, 0 */
+  }
+  dir = (s > 0) ? (int8_t)1 : ((s < 0) ? (int8_t)-1 : (int8_t)0);
+  if ((dir == 0) || (dir != e->last_dir)) {
+    e->moving = 0U;
+  } else if (e->moving < UINT16_MAX) {
+    e->moving = (uint16_t)(e->moving + 1U);
+  } else {
+    /* saturated counter */
+  }
+  e->last_dir = dir;
+  return s;
+}
+
+/* since_clip: steps since the last current sample at or beyond i_limit. */
+static void est_thr_clip(canfdi_est_thr_t *e, int32_t i_q16)
+{
+  if ((e->cfg.i_limit_q16 > 0) && ((i_q16 >= e->cfg.i_limit_q16) || (i_q16 <= -e->cfg.i_limit_q16))) {
+    e->since_clip = 0U;
+  } else if (e->since_clip < UINT16_MAX) {
+    e->since_clip = (uint16_t)(e->since_clip + 1U);
+  } else {
+    /* saturated counter */
+  }
+}
+
+/* The electrical update (phase 0), skipped during the clip hold-off. */
+static void est_thr_el_update(canfdi_est_thr_t *e)
+{
+  if (e->since_clip < e->cfg.holdoff_steps) {
+    canfdi_count_inc(&e->diag.clip_skips);
+  } else {
+    int32_t phi[4];
+    const int32_t y = canfdi_add_s32_sat(canfdi_svf_y_q16(&e->svf_u),
+                                         canfdi_mul_s32_qn(canfdi_svf_dy_q16(&e->svf_u), HALF_T_Q31, 31U));
+    phi[0] = canfdi_svf_y_q16(&e->svf_i);
+    phi[1] = canfdi_svf_dy_q16(&e->svf_i);
+    phi[2] = canfdi_svf_dy_q16(&e->svf_a);
+    phi[3] = CANFDI_Q16_ONE;
+    if (canfdi_rls_update(&e->el, phi, y)) {
+      e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&e->diag.el_updates);
+    }
+  }
+}
+
+/* The mechanical update and the fast test (phase 1), behind the validity
+ * gates of the header: clip hold-off, limp-home band, steady motion. */
+static void est_thr_mech_update(canfdi_est_thr_t *e)
+{
+  const int32_t a = canfdi_svf_y_q16(&e->svf_a);
+  if (e->since_clip < e->cfg.holdoff_steps) {
+    canfdi_count_inc(&e->diag.clip_skips);
+  } else if (a <= canfdi_add_s32_sat(e->cfg.limp_home_q16, e->cfg.limp_band_q16)) {
+    canfdi_count_inc(&e->diag.mech_lh_skips);
+  } else if (e->moving < e->cfg.holdoff_steps) {
+    canfdi_count_inc(&e->diag.mech_still_skips);
+  } else {
+    int32_t phi[5];
+    fast_update(e, canfdi_svf_y_q16(&e->svf_i), a, canfdi_svf_dy_q16(&e->svf_a), canfdi_svf_d2y_q16(&e->svf_a),
+                canfdi_svf_y_q16(&e->svf_s));
+    phi[0] = canfdi_svf_d2y_q16(&e->svf_a);
+    phi[1] = canfdi_svf_dy_q16(&e->svf_a);
+    phi[2] = a;
+    phi[3] = CANFDI_Q16_ONE;
+    phi[4] = canfdi_svf_y_q16(&e->svf_s);
+    if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
+      e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&e->diag.mech_updates);
+    }
+  }
 }
 
 void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16)
@@ -220,34 +305,8 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
     canfdi_svf_reset(&e->svf_s, 0);
     e->started = true;
   } else {
-    /* friction sign from the velocity of the previous step */
-    const int32_t v = canfdi_svf_dy_q16(&e->svf_a);
-    int32_t s = 0;
-    if (v > e->cfg.sign_band_q16) {
-      s = ONE_Q16;
-    } else if (v < -e->cfg.sign_band_q16) {
-      s = -ONE_Q16;
-    } else {
-      /* inside the dead band: unknown, 0 */
-    }
-    {
-      const int8_t dir = (s > 0) ? (int8_t)1 : ((s < 0) ? (int8_t)-1 : (int8_t)0);
-      if ((dir == 0) || (dir != e->last_dir)) {
-        e->moving = 0U;
-      } else if (e->moving < UINT16_MAX) {
-        e->moving = (uint16_t)(e->moving + 1U);
-      } else {
-        /* saturated counter */
-      }
-      e->last_dir = dir;
-    }
-    if ((e->cfg.i_limit_q16 > 0) && ((i_q16 >= e->cfg.i_limit_q16) || (i_q16 <= -e->cfg.i_limit_q16))) {
-      e->since_clip = 0U;
-    } else if (e->since_clip < UINT16_MAX) {
-      e->since_clip = (uint16_t)(e->since_clip + 1U);
-    } else {
-      /* saturated counter */
-    }
+    const int32_t s = est_thr_motion(e);
+    est_thr_clip(e, i_q16);
     canfdi_svf_step(&e->svf_u, u_q16);
     canfdi_svf_step(&e->svf_i, i_q16);
     canfdi_svf_step(&e->svf_a, angle_q16);
@@ -257,46 +316,16 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
     if (e->phase >= e->cfg.decim) {
       e->phase = 0U;
     }
-    if ((e->phase == 0U) && (e->since_clip < e->cfg.holdoff_steps)) {
-      e->diag.clip_skips += 1U;
-    } else if (e->phase == 0U) {
-      int32_t phi[4];
-      const int32_t y = canfdi_add_s32_sat(canfdi_svf_y_q16(&e->svf_u),
-                                           canfdi_mul_s32_qn(canfdi_svf_dy_q16(&e->svf_u), HALF_T_Q31, 31U));
-      phi[0] = canfdi_svf_y_q16(&e->svf_i);
-      phi[1] = canfdi_svf_dy_q16(&e->svf_i);
-      phi[2] = canfdi_svf_dy_q16(&e->svf_a);
-      phi[3] = ONE_Q16;
-      if (canfdi_rls_update(&e->el, phi, y)) {
-        e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
-        e->diag.el_updates += 1U;
-      }
+    if (e->phase == 0U) {
+      est_thr_el_update(e);
     }
+    /* the mechanical update one step later (same step when decim == 1) */
     if (e->phase == ((e->cfg.decim > 1U) ? 1U : 0U)) {
-      const int32_t a = canfdi_svf_y_q16(&e->svf_a);
-      if (e->since_clip < e->cfg.holdoff_steps) {
-        e->diag.clip_skips += 1U;
-      } else if (a <= canfdi_add_s32_sat(e->cfg.limp_home_q16, e->cfg.limp_band_q16)) {
-        e->diag.mech_lh_skips += 1U;
-      } else if (e->moving < e->cfg.holdoff_steps) {
-        e->diag.mech_still_skips += 1U;
-      } else {
-        int32_t phi[5];
-        fast_update(e, canfdi_svf_y_q16(&e->svf_i), a, canfdi_svf_dy_q16(&e->svf_a),
-                    canfdi_svf_d2y_q16(&e->svf_a), canfdi_svf_y_q16(&e->svf_s));
-        phi[0] = canfdi_svf_d2y_q16(&e->svf_a);
-        phi[1] = canfdi_svf_dy_q16(&e->svf_a);
-        phi[2] = a;
-        phi[3] = ONE_Q16;
-        phi[4] = canfdi_svf_y_q16(&e->svf_s);
-        if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
-          e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
-          e->diag.mech_updates += 1U;
-        }
-      }
+      est_thr_mech_update(e);
     }
   }
-  e->diag.steps += 1U;
+  e->has_run = true;
+  canfdi_count_inc(&e->diag.steps);
 }
 
 int32_t canfdi_est_thr_r_q16(const canfdi_est_thr_t *e)
@@ -365,6 +394,11 @@ int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e)
 bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e)
 {
   return e->f_sep && (e->f_n >= e->cfg.fast_min_updates) && (e->f_age <= e->cfg.fast_stale_steps);
+}
+
+bool canfdi_est_thr_has_run(const canfdi_est_thr_t *e)
+{
+  return e->has_run;
 }
 
 bool canfdi_est_thr_excited(const canfdi_est_thr_t *e)

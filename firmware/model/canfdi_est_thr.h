@@ -7,13 +7,14 @@
  * equation. Two UD-RLS estimators (canfdi_rls.h) on SVF signals
  * (canfdi_svf.h).
  *
- * Equations (design brief, shaft-referred; theta the valve angle):
+ * Equations (the valve of docs/design.md, shaft-referred; theta the valve
+ * angle):
  *   electrical:  U = R i + L di/dt + K dtheta/dt + U_0
  *                y = U,  phi = [i, di/dt, dtheta/dt, 1],
  *                theta_e = [R, L, K, U_0]
- *                (L is estimated too although the brief names R, K and the
- *                offset: L/R = 1 ms is not negligible against the SVF corner
- *                and leaving it out biases R through the correlated di/dt.)
+ *                (L is estimated too: L/R = 1 ms is not negligible against
+ *                the SVF corner, and leaving it out biases R through the
+ *                correlated di/dt.)
  *   mechanical:  K i = J theta'' + B theta' + k_s (theta - theta_LH)
  *                      + P sign(theta - theta_LH) + T_c sign(theta')
  *                divided by K, with the measured current as output and
@@ -46,8 +47,9 @@
  * the stroke, against T_c ~ 0.28 N m).
  * Fast mechanical test. The 5-parameter RLS needs ~10 s of memory to tell
  * k_s, P and T_c apart (the spring torque changes by ~0.1 N m over the
- * stroke only), so a weak spring or a doubled friction was isolated only
- * 1.6-2.8 s after the fault. With the nominal parameters known, only the
+ * stroke only), so on its own it isolates a weak spring or a doubled
+ * friction only 1.6-2.8 s after the fault. With the nominal parameters
+ * known, only the
  * two fault directions are estimated, on the same gated samples as the
  * mechanical RLS (moving one way, away from limp-home, no clipping):
  *   r = K i - J theta'' - B theta' - c - T_c s,
@@ -95,13 +97,15 @@
  *
  * Cost per step: 4 SVF steps of order 3 every step, plus one RLS update
  * (4 parameters, or 5 for the mechanical part) on each of two steps out of
- * `decim`. Measured on the host (x86-64, gcc -O2, callgrind): mean 12 k
- * instructions per step with decim 2; worst-case step = 4 SVF + the
- * 5-parameter update ~ 1.9 k + 15.7 k = 17.6 k. Cortex-M0+ estimate ~30 k:
- * on a small M0+ raise decim (the memory 1/(forget rate) scales with it).
- * The fast test adds ~40 multiplies and 3 64-bit divisions per mechanical
- * update. Memory: sizeof(canfdi_est_thr_t) = 1424 bytes (before the fast
- * test; it adds ~70 bytes of state and configuration) on a 32-bit target.
+ * `decim`; the fast test adds ~40 multiplies and 3 64-bit divisions per
+ * mechanical update. Measured executed instructions (arm-none-eabi-gcc 12
+ * -Os, QEMU mps2-an386 -icount, SysTick; default cfg, 4000 steps of the
+ * valve stroking between 0.46 and 1.07 rad, 1201 of them with a mechanical
+ * update): Cortex-M4 mean 17 100, max 28 800 (a step with the mechanical
+ * update and the fast test); Cortex-M0+ code mean 34 100, max 56 100
+ * (1.2 ms at 48 MHz: on a small M0+ raise decim, the memory 1/(forget
+ * rate) scales with it). Memory: sizeof(canfdi_est_thr_t) = 1504 bytes on
+ * a 32-bit target.
  */
 #ifndef CANFDI_EST_THR_H
 #define CANFDI_EST_THR_H
@@ -156,14 +160,18 @@ typedef struct {
   uint16_t fast_stale_steps; /* valid only within this many steps of an update */
 } canfdi_est_thr_cfg_t;
 
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them (canfdi_est_thr_has_run says whether the
+ * estimator has stepped). */
 typedef struct {
-  uint32_t steps;
+  uint32_t steps;           /* canfdi_est_thr_step calls */
   uint32_t el_updates;
   uint32_t mech_updates;
   uint32_t mech_lh_skips;  /* mechanical updates skipped near limp-home */
   uint32_t mech_still_skips; /* mechanical updates skipped: not moving steadily */
   uint32_t clip_skips;     /* updates skipped after a clipped current sample */
-  uint32_t resets;
+  uint32_t resets;          /* canfdi_est_thr_reset calls (init counts as none) */
   uint32_t fast_updates;   /* updates of the fast structured test */
 } canfdi_est_thr_diag_t;
 
@@ -175,13 +183,17 @@ typedef struct {
   canfdi_svf_t svf_s;
   canfdi_rls_t el;
   canfdi_rls_t mech;
-  uint8_t phase;
+  uint8_t phase;           /* step counter modulo decim, 0 .. decim - 1 */
+  bool has_run;           /* stepped at least once since init (reset keeps it) */
   bool started;
-  uint16_t since_clip;     /* steps since the last clipped current sample */
-  uint16_t moving;         /* steps moving in one direction beyond the band */
+  uint16_t since_clip;     /* steps since the last clipped current sample,
+                            * saturating at UINT16_MAX */
+  uint16_t moving;         /* steps moving in one direction beyond the band,
+                            * saturating at UINT16_MAX */
   int8_t last_dir;
-  uint32_t el_since_reset;
-  uint32_t mech_since_reset;
+  uint32_t el_since_reset;   /* electrical updates since init/reset (state of
+                              * `converged`), saturating at UINT32_MAX */
+  uint32_t mech_since_reset; /* mechanical updates, likewise */
   /* fast structured test: EW means, Q32 (c, s, r of the header) */
   int64_t f_cc_q32;
   int64_t f_cs_q32;
@@ -190,24 +202,28 @@ typedef struct {
   int64_t f_sr_q32;
   int32_t f_spring_dev_q16; /* last solution */
   int32_t f_fric_dev_q16;
-  uint16_t f_n;             /* updates since reset (saturating) */
-  uint16_t f_age;           /* steps since the last update (saturating) */
+  uint16_t f_n;             /* updates since reset, saturating at UINT16_MAX */
+  uint16_t f_age;           /* steps since the last update, saturating at
+                             * UINT16_MAX (UINT16_MAX after reset: none yet) */
   bool f_sep;               /* last solution separable */
   canfdi_est_thr_diag_t diag;
 } canfdi_est_thr_t;
 
 /*
- * Defaults for the design brief's valve at 1 ms: SVF order 3 at 300 rad/s,
- * decim 2 (500 Hz updates), lambda 0.995 electrical (memory 0.4 s) and
- * 0.9995 mechanical (2000 updates; with the motion gate ~ 5-8 s), p0 100, trace
- * bound 1000, excitation threshold 1e-3 on the less excited of i and
- * theta' (electrical: ~0.06 A and ~0.25 rad/s rms) and of theta' and theta
- * (mechanical: ~0.25 rad/s and ~1.8 deg rms), time constant 2^6, converged after
- * 1000 updates (2 s), sign dead band 0.3 rad/s (~3 sigma of the filtered
- * velocity noise for 0.003 V TPS noise), limp band 2 deg, current limit
- * 9.9 A (the simulator's sensor span is +-10 A), hold-off 40 steps (the
- * order-3 impulse response at 300 rad/s decays below 1e-3 in ~37 ms), nominal
- * parameters of the brief with U_0 = 0 and theta_LH = 6.5 deg.
+ * Defaults for the valve of docs/design.md at 1 ms: SVF order 3 at
+ * 300 rad/s, decim 2 (500 Hz updates), lambda 0.995 electrical (memory
+ * 0.4 s) and 0.9995 mechanical (2000 updates; with the motion gate
+ * ~ 5-8 s), p0 100, trace bound 1000, excitation threshold 1e-3 on the less
+ * excited of i and theta' (electrical: ~0.06 A and ~0.25 rad/s rms) and of
+ * theta' and theta (mechanical: ~0.25 rad/s and ~1.8 deg rms), time
+ * constant 2^6, converged after 1000 updates (2 s), sign dead band
+ * 0.3 rad/s (~3 sigma of the filtered velocity noise for 0.003 V TPS
+ * noise), limp band 2 deg, current limit 9.9 A (the simulator's sensor span
+ * is +-10 A), hold-off 40 steps (the order-3 impulse response at 300 rad/s
+ * decays below 1e-3 in ~37 ms), nominal parameters of docs/design.md with
+ * U_0 = 0 and theta_LH = 6.5 deg; fast test shift 6, valid after 100
+ * updates while det / (m_cc m_ss) >= 1/4 and within 500 steps of the last
+ * update.
  */
 void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg);
 
@@ -237,6 +253,9 @@ int32_t canfdi_est_thr_friction_q16(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_fast_spring_dev_q16(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e);
 bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e);
+
+/* As canfdi_est_dcm_has_run. O(1). */
+bool canfdi_est_thr_has_run(const canfdi_est_thr_t *e);
 
 bool canfdi_est_thr_excited(const canfdi_est_thr_t *e);
 bool canfdi_est_thr_el_converged(const canfdi_est_thr_t *e);

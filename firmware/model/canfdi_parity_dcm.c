@@ -4,6 +4,9 @@
  */
 #include "model/canfdi_parity_dcm.h"
 
+#include "core/canfdi_count.h"
+#include "core/canfdi_qconst.h"
+
 /* Fraction bits of the residual accumulator (Q23.40 in int64_t). */
 #define PDCM_ACC_FRAC 40U
 /* Fraction bits of the parameters. */
@@ -16,9 +19,6 @@
 /* |r1| used in the R_A least-squares sums: clamped to 64 V (2^22 in Q16.16)
  * so that N * |r1 * I| < 2^63 for every allowed block length. */
 #define PDCM_R1_SUM_CLAMP ((int32_t)1 << 22)
-/* Parameter domain (Q8.24 raw values). */
-#define PDCM_Q24(num, den) ((int32_t)CANFDI_QN_RATIO_((num), (den), 24))
-#define PDCM_ONE_Q16 ((int32_t)65536)
 
 /* ------------------------------------------------------------------------ */
 /* Coefficients: value = m * 2^-f with |m| in [2^29, 2^31)                   */
@@ -138,7 +138,7 @@ static int32_t pdcm_acc_out(canfdi_parity_dcm_t *p, int64_t acc)
   const int64_t r = canfdi_asr64_rnd(acc, PDCM_ACC_FRAC - 16U);
   const int32_t y = canfdi_sat_s64_to_s32(r);
   if ((int64_t)y != r) {
-    p->diag.res_saturations += (p->diag.res_saturations < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.res_saturations);
   }
   return y;
 }
@@ -174,25 +174,25 @@ int32_t canfdi_parity_dcm_cfg_check(const canfdi_parity_dcm_cfg_t *cfg)
   unsigned k;
   if (cfg == NULL) {
     out = -CANFDI_EINVAL;
-  } else if (!pdcm_in(cfg->ra_ohm_q24, PDCM_Q24(1, 1000), PDCM_Q24(100, 1)) ||
-             !pdcm_in(cfg->la_H_q24, PDCM_Q24(1, 1000000), PDCM_Q24(1, 1)) ||
-             !pdcm_in(cfg->psi_Vs_q24, PDCM_Q24(1, 100), PDCM_Q24(10, 1)) ||
-             !pdcm_in(cfg->j_kgm2_q24, PDCM_Q24(1, 1000000), PDCM_Q24(10, 1)) ||
-             !pdcm_in(cfg->mf1_Nms_q24, 0, PDCM_Q24(1, 1)) ||
-             !pdcm_in(cfg->mf0_Nm_q24, 0, PDCM_Q24(10, 1)) ||
+  } else if (!pdcm_in(cfg->ra_ohm_q24, CANFDI_Q24(1, 1000), CANFDI_Q24(100, 1)) ||
+             !pdcm_in(cfg->la_H_q24, CANFDI_Q24(1, 1000000), CANFDI_Q24(1, 1)) ||
+             !pdcm_in(cfg->psi_Vs_q24, CANFDI_Q24(1, 100), CANFDI_Q24(10, 1)) ||
+             !pdcm_in(cfg->j_kgm2_q24, CANFDI_Q24(1, 1000000), CANFDI_Q24(10, 1)) ||
+             !pdcm_in(cfg->mf1_Nms_q24, 0, CANFDI_Q24(1, 1)) ||
+             !pdcm_in(cfg->mf0_Nm_q24, 0, CANFDI_Q24(10, 1)) ||
              !pdcm_in(cfg->omega_c_rad_s, 20, 1000) ||
-             !pdcm_in(cfg->w_band_rad_s_q16, 1, 100 * PDCM_ONE_Q16)) {
+             !pdcm_in(cfg->w_band_rad_s_q16, 1, 100 * CANFDI_Q16_ONE)) {
     out = -CANFDI_EINVAL;
   } else if ((cfg->ra_track != 0U) &&
              ((cfg->ra_block_steps < 10U) || (cfg->ra_block_steps > 1000U) ||
               ((uint64_t)cfg->ra_tau_s * 1000000U <
                (uint64_t)cfg->ra_block_steps * (uint64_t)CANFDI_CFG_STEP_US) ||
               (cfg->ra_tau_s > CANFDI_PARITY_DCM_TAU_MAX_S) ||
-              !pdcm_in(cfg->ra_i_min_A_q16, 1, 30 * PDCM_ONE_Q16) ||
-              !pdcm_in(cfg->ra_gate_q16, 1, 32 * PDCM_ONE_Q16) ||
-              !pdcm_in(cfg->ra_rate_max_ohm_s_q24, 0, PDCM_Q24(1, 1)) ||
-              !pdcm_in(cfg->ra_min_ohm_q24, PDCM_Q24(1, 1000), cfg->ra_ohm_q24) ||
-              !pdcm_in(cfg->ra_max_ohm_q24, cfg->ra_ohm_q24, PDCM_Q24(100, 1)))) {
+              !pdcm_in(cfg->ra_i_min_A_q16, 1, 30 * CANFDI_Q16_ONE) ||
+              !pdcm_in(cfg->ra_gate_q16, 1, 32 * CANFDI_Q16_ONE) ||
+              !pdcm_in(cfg->ra_rate_max_ohm_s_q24, 0, CANFDI_Q24(1, 1)) ||
+              !pdcm_in(cfg->ra_min_ohm_q24, CANFDI_Q24(1, 1000), cfg->ra_ohm_q24) ||
+              !pdcm_in(cfg->ra_max_ohm_q24, cfg->ra_ohm_q24, CANFDI_Q24(100, 1)))) {
     out = -CANFDI_EINVAL;
   } else if (!pdcm_in(cfg->unc_ra_ohm_q24, 0, cfg->ra_ohm_q24) ||
              !pdcm_in(cfg->unc_la_H_q24, 0, cfg->la_H_q24) ||
@@ -322,14 +322,14 @@ void canfdi_parity_dcm_reset(canfdi_parity_dcm_t *p)
     p->out.exceed = 0U;
     p->out.ra_hat_ohm_q24 = p->ra_hat_ohm_q24;
     p->out.ra_at_limit = false;
-    p->diag.resets += (p->diag.resets < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.resets);
   }
 }
 
 int32_t canfdi_parity_dcm_set_ra(canfdi_parity_dcm_t *p, int32_t ra_ohm_q24)
 {
   int32_t out = -CANFDI_EINVAL;
-  if ((p != NULL) && (p->cfg != NULL) && pdcm_in(ra_ohm_q24, PDCM_Q24(1, 1000), PDCM_Q24(100, 1))) {
+  if ((p != NULL) && (p->cfg != NULL) && pdcm_in(ra_ohm_q24, CANFDI_Q24(1, 1000), CANFDI_Q24(100, 1))) {
     p->ra_hat_ohm_q24 = ra_ohm_q24;
     if (p->cfg->ra_track != 0U) {
       p->ra_hat_ohm_q24 =
@@ -368,7 +368,7 @@ static void pdcm_ra_block(canfdi_parity_dcm_t *p)
   const int64_t gate = (int64_t)c->ra_gate_q16 * (int64_t)c->ra_block_steps;
   const bool bad = (p->blk_rn > gate) || (p->blk_rn < -gate);
   if ((bad && !learning) || p->blk_invalid || (p->blk_ii < ii_min)) {
-    p->diag.ra_blocks_rejected += (p->diag.ra_blocks_rejected < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.ra_blocks_rejected);
   } else {
     /* dR in Q24: both sums are Q32 (Q16.16 x Q16.16). */
     const canfdi_parity_dcm_coef_t q = pdcm_coef_ratio(p->blk_ri, 32U, p->blk_ii, 32U);
@@ -404,13 +404,13 @@ static void pdcm_ra_block(canfdi_parity_dcm_t *p)
     }
     ra = canfdi_clamp_s32(ra, c->ra_min_ohm_q24, c->ra_max_ohm_q24);
     if (hit) {
-      p->diag.ra_limit_hits += (p->diag.ra_limit_hits < UINT32_MAX) ? 1U : 0U;
+      canfdi_count_inc(&p->diag.ra_limit_hits);
     }
     if (ra != p->ra_hat_ohm_q24) {
       p->ra_hat_ohm_q24 = ra;
       pdcm_coef_ra(p);
     }
-    p->diag.ra_updates += (p->diag.ra_updates < UINT32_MAX) ? 1U : 0U;
+    canfdi_count_inc(&p->diag.ra_updates);
   }
   pdcm_clear_block(p);
 }
@@ -432,233 +432,306 @@ static int32_t pdcm_unc_term(int64_t acc, int32_t dp_q24)
   return canfdi_mul_s32_qn(s_q16, dp_q24, PDCM_PAR_FRAC);
 }
 
+/*
+ * The step, phase by phase. Each phase is a static function; the step
+ * calls them in this order, which is the order of the contract (the state a
+ * phase reads is what the phases before it left):
+ *   1. pdcm_condition   interval means of I_A and w (SVF inputs), z
+ *   2. pdcm_late_load   a change of the known load starts a hold
+ *   3. pdcm_filter      the four SVFs (primed on the first sample)
+ *   4. pdcm_residuals   r1 .. r4
+ *   5. pdcm_uncertainty the uncertainty term of each band
+ *   6. pdcm_validity    settle, the standstill region, the load hold
+ *   7. pdcm_load_means  r2 .. r4 follow their mean (optional)
+ *   8. pdcm_thresholds  bands, normalisation, exceed flags
+ *   9. pdcm_ra_track    the R_A least-squares block
+ */
+
+/* SVF inputs of one sample. */
+typedef struct {
+  int32_t xi; /* interval mean of I_A, / 2^I_PRESCALE */
+  int32_t xw; /* interval mean of w, / 2^W_PRESCALE */
+  int32_t z;  /* M_L + M_F0 sgn(w), N m */
+} pdcm_in_t;
+
+/* Filtered signals of one step (SVF outputs, each in its own format). */
+typedef struct {
+  int32_t u_f;
+  int32_t u_d;
+  int32_t i_f;
+  int32_t i_d;
+  int32_t i_d2;
+  int32_t w_f;
+  int32_t w_d;
+  int32_t w_d2;
+  int32_t z_f;
+  int32_t z_d;
+} pdcm_sig_t;
+
+/*
+ * ZOH alignment: the measured U_A is the voltage held over the interval
+ * that ends now; the interval means of I_A and w are approximated by the
+ * mean of the two end samples. The SVF inputs of I and w are scaled down by
+ * 2^PRESCALE in the same rounding step (range of the 2nd derivative).
+ * z = M_L + M_F0 sgn(w): the known torques of the mechanical equation,
+ * filtered by the same SVF; sgn is linear inside +-w_band.
+ */
+static pdcm_in_t pdcm_condition(canfdi_parity_dcm_t *p, const canfdi_parity_dcm_in_t *in)
+{
+  pdcm_in_t x;
+  int32_t w_avg;
+  int32_t sgn_q16;
+  int64_t acc;
+  if (!p->primed) {
+    p->i_prev_q16 = in->i_A_q16;
+    p->w_prev_q16 = in->w_rad_s_q16;
+  }
+  x.xi = canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)in->i_A_q16 + p->i_prev_q16,
+                                                1U + CANFDI_PARITY_DCM_I_PRESCALE));
+  x.xw = canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)in->w_rad_s_q16 + p->w_prev_q16,
+                                                1U + CANFDI_PARITY_DCM_W_PRESCALE));
+  w_avg = canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)in->w_rad_s_q16 + p->w_prev_q16, 1U));
+  p->i_prev_q16 = in->i_A_q16;
+  p->w_prev_q16 = in->w_rad_s_q16;
+  acc = pdcm_mac(0, p->k[CANFDI_PDCM_K_INVB], w_avg, 16U, false);
+  sgn_q16 = canfdi_clamp_s32(canfdi_sat_s64_to_s32(canfdi_asr64_rnd(acc, PDCM_ACC_FRAC - 16U)),
+                             -CANFDI_Q16_ONE, CANFDI_Q16_ONE);
+  x.z = canfdi_add_s32_sat(in->load_Nm_q16, canfdi_mul_s32_qn(p->cfg->mf0_Nm_q24, sgn_q16, 24U));
+  return x;
+}
+
+/* Late load: a change of the known load holds r2..r4 (header). */
+static void pdcm_late_load(canfdi_parity_dcm_t *p, int32_t load_q16)
+{
+  if (p->primed && (load_q16 != p->load_prev_q16) && (p->cfg->load_hold_steps != 0U)) {
+    p->load_hold = p->cfg->load_hold_steps;
+    canfdi_count_inc(&p->diag.load_holds);
+  }
+  p->load_prev_q16 = load_q16;
+}
+
+/* The four SVFs, restarted on their first sample after init/reset. */
+static pdcm_sig_t pdcm_filter(canfdi_parity_dcm_t *p, int32_t u_q16, const pdcm_in_t *x)
+{
+  pdcm_sig_t s;
+  if (!p->primed) {
+    canfdi_svf_reset(&p->svf_u, u_q16);
+    canfdi_svf_reset(&p->svf_i, x->xi);
+    canfdi_svf_reset(&p->svf_w, x->xw);
+    canfdi_svf_reset(&p->svf_z, x->z);
+    p->primed = true;
+  }
+  canfdi_svf_step(&p->svf_u, u_q16);
+  canfdi_svf_step(&p->svf_i, x->xi);
+  canfdi_svf_step(&p->svf_w, x->xw);
+  canfdi_svf_step(&p->svf_z, x->z);
+  s.u_f = canfdi_svf_y_q16(&p->svf_u);
+  s.u_d = canfdi_svf_dy_q16(&p->svf_u);
+  s.i_f = canfdi_svf_y_q16(&p->svf_i);
+  s.i_d = canfdi_svf_dy_q16(&p->svf_i);
+  s.i_d2 = canfdi_svf_d2y_q16(&p->svf_i);
+  s.w_f = canfdi_svf_y_q16(&p->svf_w);
+  s.w_d = canfdi_svf_dy_q16(&p->svf_w);
+  s.w_d2 = canfdi_svf_d2y_q16(&p->svf_w);
+  s.z_f = canfdi_svf_y_q16(&p->svf_z);
+  s.z_d = canfdi_svf_dy_q16(&p->svf_z);
+  return s;
+}
+
+/* The four residuals (header: the model) on the filtered signals. */
+static void pdcm_residuals(canfdi_parity_dcm_t *p, const pdcm_sig_t *s, int32_t r[CANFDI_PARITY_DCM_N_RES])
+{
+  const canfdi_parity_dcm_coef_t *k = p->k;
+  int64_t acc;
+  /* r1 = U - R I - L dI - Psi w                                    [V] */
+  acc = pdcm_add_q16(0, s->u_f, false);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_R], s->i_f, PDCM_FRAC_I, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_L], s->i_d, PDCM_FRAC_I, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_PSI], s->w_f, PDCM_FRAC_W, true);
+  r[0] = pdcm_acc_out(p, acc);
+  /* r2 = Psi I - J dw - M_F1 w - z                                 [N m] */
+  acc = pdcm_mac(0, k[CANFDI_PDCM_K_PSI], s->i_f, PDCM_FRAC_I, false);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_J], s->w_d, PDCM_FRAC_W, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_F1], s->w_f, PDCM_FRAC_W, true);
+  acc = pdcm_add_q16(acc, s->z_f, true);
+  r[1] = pdcm_acc_out(p, acc);
+  /* r3 = cI I + cdI dI + cd2I d2I - (J/Psi) dU - (M_F1/Psi) U - z  [N m] */
+  acc = pdcm_mac(0, k[CANFDI_PDCM_K_CI], s->i_f, PDCM_FRAC_I, false);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CDI], s->i_d, PDCM_FRAC_I, false);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CD2I], s->i_d2, PDCM_FRAC_I, false);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_JP], s->u_d, PDCM_FRAC_U, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_FP], s->u_f, PDCM_FRAC_U, true);
+  acc = pdcm_add_q16(acc, s->z_f, true);
+  r[2] = pdcm_acc_out(p, acc);
+  /* r4 = U - cI w - cdI dw - cd2I d2w - (R/Psi) z - (L/Psi) dz     [V] */
+  acc = pdcm_add_q16(0, s->u_f, false);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CI], s->w_f, PDCM_FRAC_W, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CDI], s->w_d, PDCM_FRAC_W, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CD2I], s->w_d2, PDCM_FRAC_W, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_RP], s->z_f, PDCM_FRAC_Z, true);
+  acc = pdcm_mac(acc, k[CANFDI_PDCM_K_LP], s->z_d, PDCM_FRAC_Z, true);
+  r[3] = pdcm_acc_out(p, acc);
+}
+
+/* Uncertainty bands: first-order propagation of the stated parameter
+ * uncertainties, sum over p of |dr/dp| dp on the filtered signals (the
+ * partial derivatives of the four equations, see the header). */
+static void pdcm_uncertainty(const canfdi_parity_dcm_t *p, const pdcm_sig_t *s,
+                             int32_t unc[CANFDI_PARITY_DCM_N_RES])
+{
+  const canfdi_parity_dcm_coef_t *k = p->k;
+  const int32_t dR = p->cfg->unc_ra_ohm_q24;
+  const int32_t dL = p->cfg->unc_la_H_q24;
+  const int32_t dJ = p->cfg->unc_j_kgm2_q24;
+  int64_t sr;
+  int64_t sl;
+  int64_t sj;
+  /* r1: dr/dR = -I, dr/dL = -dI */
+  sr = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], s->i_f, PDCM_FRAC_I, false);
+  sl = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], s->i_d, PDCM_FRAC_I, false);
+  unc[0] = canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL));
+  /* r2: dr/dJ = -dw */
+  sj = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], s->w_d, PDCM_FRAC_W, false);
+  unc[1] = pdcm_unc_term(sj, dJ);
+  /* r3: dr/dR = (M_F1 I + J dI) / Psi, dr/dL = (M_F1 dI + J d2I) / Psi,
+   *     dr/dJ = (R dI + L d2I - dU) / Psi */
+  sr = pdcm_mac(0, k[CANFDI_PDCM_K_FP], s->i_f, PDCM_FRAC_I, false);
+  sr = pdcm_mac(sr, k[CANFDI_PDCM_K_JP], s->i_d, PDCM_FRAC_I, false);
+  sl = pdcm_mac(0, k[CANFDI_PDCM_K_FP], s->i_d, PDCM_FRAC_I, false);
+  sl = pdcm_mac(sl, k[CANFDI_PDCM_K_JP], s->i_d2, PDCM_FRAC_I, false);
+  sj = pdcm_mac(0, k[CANFDI_PDCM_K_RP], s->i_d, PDCM_FRAC_I, false);
+  sj = pdcm_mac(sj, k[CANFDI_PDCM_K_LP], s->i_d2, PDCM_FRAC_I, false);
+  sj = pdcm_mac(sj, k[CANFDI_PDCM_K_IP], s->u_d, PDCM_FRAC_U, true);
+  unc[2] = canfdi_add_s32_sat(canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL)),
+                              pdcm_unc_term(sj, dJ));
+  /* r4: dr/dR = -(M_F1 w + J dw + z) / Psi,
+   *     dr/dL = -(M_F1 dw + J d2w + dz) / Psi, dr/dJ = -(R dw + L d2w) / Psi */
+  sr = pdcm_mac(0, k[CANFDI_PDCM_K_FP], s->w_f, PDCM_FRAC_W, false);
+  sr = pdcm_mac(sr, k[CANFDI_PDCM_K_JP], s->w_d, PDCM_FRAC_W, false);
+  sr = pdcm_mac(sr, k[CANFDI_PDCM_K_IP], s->z_f, PDCM_FRAC_Z, false);
+  sl = pdcm_mac(0, k[CANFDI_PDCM_K_FP], s->w_d, PDCM_FRAC_W, false);
+  sl = pdcm_mac(sl, k[CANFDI_PDCM_K_JP], s->w_d2, PDCM_FRAC_W, false);
+  sl = pdcm_mac(sl, k[CANFDI_PDCM_K_IP], s->z_d, PDCM_FRAC_Z, false);
+  sj = pdcm_mac(0, k[CANFDI_PDCM_K_RP], s->w_d, PDCM_FRAC_W, false);
+  sj = pdcm_mac(sj, k[CANFDI_PDCM_K_LP], s->w_d2, PDCM_FRAC_W, false);
+  unc[3] = canfdi_add_s32_sat(canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL)),
+                              pdcm_unc_term(sj, dJ));
+}
+
+/*
+ * Validity: the SVFs need settle steps after (re)start; r2..r4 hold only
+ * while the Coulomb term is +-M_F0, i.e. outside +-w_band, and again settle
+ * steps after re-entering that region (the filter still remembers the
+ * stuck phase), and not during a late-load hold; r1 and r4 carry R_A: not
+ * evaluable while it is being learnt. Returns the valid mask; counts the
+ * settle and load-hold steps down.
+ */
+static uint8_t pdcm_validity(canfdi_parity_dcm_t *p, int32_t w_f)
+{
+  const canfdi_parity_dcm_cfg_t *c = p->cfg;
+  const int32_t wb = canfdi_asr32_rnd(c->w_band_rad_s_q16, CANFDI_PARITY_DCM_W_PRESCALE);
+  uint8_t valid = 0U;
+  if (p->settle > 0U) {
+    p->settle = (uint16_t)(p->settle - 1U);
+  }
+  if ((w_f >= wb) || (w_f <= -wb)) {
+    p->w_ok = (p->w_ok < UINT16_MAX) ? (uint16_t)(p->w_ok + 1U) : p->w_ok;
+  } else {
+    p->w_ok = 0U;
+  }
+  if (p->settle == 0U) {
+    const bool ra_ok = (p->ra_learn_left == 0U);
+    valid = ra_ok ? 1U : 0U;
+    if ((p->w_ok >= c->settle_steps) && (p->load_hold == 0U)) {
+      valid |= ra_ok ? 0x0EU : 0x06U;
+    }
+  }
+  if (p->load_hold > 0U) {
+    p->load_hold = (uint16_t)(p->load_hold - 1U);
+  }
+  return valid;
+}
+
+/* Slowly varying load: r2..r4 follow their own mean (time constant
+ * load_tau) while valid, so each keeps its decoupling. */
+static void pdcm_load_means(canfdi_parity_dcm_t *p, uint8_t valid, int32_t r[CANFDI_PARITY_DCM_N_RES])
+{
+  unsigned j;
+  if (p->load_alpha_q31 != 0) {
+    for (j = 1U; j < CANFDI_PARITY_DCM_N_RES; j++) {
+      if ((valid & (1U << j)) != 0U) {
+        const int64_t d = canfdi_sub_s64_sat((int64_t)r[j] * 65536, p->bias_q32[j - 1U]);
+        p->bias_q32[j - 1U] = canfdi_add_s64_sat(p->bias_q32[j - 1U], canfdi_mul_s64_q31(d, p->load_alpha_q31));
+      }
+      r[j] = canfdi_sub_s32_sat(r[j], canfdi_sat_s64_to_s32(canfdi_asr64_rnd(p->bias_q32[j - 1U], 16U)));
+    }
+  }
+}
+
+/* Thresholds: the adaptive hook (excitation: the filtered U_A) plus the
+ * uncertainty band, capped at band.max; normalisation, flags, outputs. */
+static void pdcm_thresholds(canfdi_parity_dcm_t *p, int32_t u_f, const int32_t r[CANFDI_PARITY_DCM_N_RES],
+                            const int32_t unc[CANFDI_PARITY_DCM_N_RES], uint8_t valid)
+{
+  uint8_t exceed = 0U;
+  unsigned j;
+  for (j = 0U; j < CANFDI_PARITY_DCM_N_RES; j++) {
+    const int32_t th = canfdi_clamp_s32(canfdi_add_s32_sat(canfdi_adapt_step(&p->thr[j], u_f), unc[j]), 0,
+                                        p->cfg->band[j].max);
+    const int64_t ra = ((int64_t)r[j] < 0) ? -(int64_t)r[j] : (int64_t)r[j];
+    p->out.thr_q16[j] = th;
+    p->out.r_q16[j] = r[j];
+    p->out.rn_q16[j] = canfdi_div_s32_qn(r[j], th, 16U);
+    if (((valid & (1U << j)) != 0U) && (ra > (int64_t)th)) {
+      exceed |= (uint8_t)(1U << j);
+    }
+  }
+  p->out.valid = valid;
+  p->out.exceed = exceed;
+}
+
+/* Adaptive R_A: least squares of r1 against I over a block; a block is
+ * used only if r1 was valid and below the gate throughout. */
+static void pdcm_ra_track(canfdi_parity_dcm_t *p, int32_t i_f, int32_t r1)
+{
+  if (p->cfg->ra_track != 0U) {
+    if (p->settle == 0U) {
+      const int32_t i_q16 = canfdi_shl32_sat(i_f, CANFDI_PARITY_DCM_I_PRESCALE);
+      const int32_t r1c = canfdi_clamp_s32(r1, -PDCM_R1_SUM_CLAMP, PDCM_R1_SUM_CLAMP);
+      p->blk_rn = canfdi_add_s64_sat(p->blk_rn, (int64_t)p->out.rn_q16[0]);
+      p->blk_ri = canfdi_add_s64_sat(p->blk_ri, (int64_t)r1c * i_q16);
+      p->blk_ii = canfdi_add_s64_sat(p->blk_ii, (int64_t)i_q16 * i_q16);
+    } else {
+      p->blk_invalid = true;
+    }
+    p->blk_n = (uint16_t)(p->blk_n + 1U);
+    if (p->blk_n >= p->cfg->ra_block_steps) {
+      pdcm_ra_block(p);
+    }
+  }
+  p->out.ra_hat_ohm_q24 = p->ra_hat_ohm_q24;
+}
+
 const canfdi_parity_dcm_out_t *canfdi_parity_dcm_step(canfdi_parity_dcm_t *p,
                                                       const canfdi_parity_dcm_in_t *in)
 {
   const canfdi_parity_dcm_out_t *out = NULL;
   if ((p != NULL) && (p->cfg != NULL) && (in != NULL)) {
-    const canfdi_parity_dcm_cfg_t *c = p->cfg;
-    const canfdi_parity_dcm_coef_t *k = p->k;
-    int32_t xi;
-    int32_t xw;
-    int32_t w_avg;
-    int32_t sgn_q16;
-    int32_t z;
-    int32_t u_f;
-    int32_t u_d;
-    int32_t i_f;
-    int32_t i_d;
-    int32_t i_d2;
-    int32_t w_f;
-    int32_t w_d;
-    int32_t w_d2;
-    int32_t z_f;
-    int32_t z_d;
+    pdcm_in_t x;
+    pdcm_sig_t s;
     int32_t r[CANFDI_PARITY_DCM_N_RES];
     int32_t unc[CANFDI_PARITY_DCM_N_RES];
-    int64_t acc;
-    uint8_t valid = 0U;
-    uint8_t exceed = 0U;
-    unsigned j;
-
-    if (!p->primed) {
-      p->i_prev_q16 = in->i_A_q16;
-      p->w_prev_q16 = in->w_rad_s_q16;
-    }
-    /* ZOH alignment: the measured U_A is the voltage held over the interval
-     * that ends now; the interval means of I_A and w are approximated by the
-     * mean of the two end samples. The SVF inputs of I and w are scaled down
-     * by 2^PRESCALE in the same rounding step (range of the 2nd derivative). */
-    xi = canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)in->i_A_q16 + p->i_prev_q16,
-                                                1U + CANFDI_PARITY_DCM_I_PRESCALE));
-    xw = canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)in->w_rad_s_q16 + p->w_prev_q16,
-                                                1U + CANFDI_PARITY_DCM_W_PRESCALE));
-    w_avg = canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)in->w_rad_s_q16 + p->w_prev_q16, 1U));
-    p->i_prev_q16 = in->i_A_q16;
-    p->w_prev_q16 = in->w_rad_s_q16;
-
-    /* z = M_L + M_F0 sgn(w): the known torques of the mechanical equation,
-     * filtered by the same SVF. sgn is linear inside +-w_band. */
-    acc = pdcm_mac(0, k[CANFDI_PDCM_K_INVB], w_avg, 16U, false);
-    sgn_q16 = canfdi_clamp_s32(canfdi_sat_s64_to_s32(canfdi_asr64_rnd(acc, PDCM_ACC_FRAC - 16U)),
-                               -PDCM_ONE_Q16, PDCM_ONE_Q16);
-    z = canfdi_add_s32_sat(in->load_Nm_q16, canfdi_mul_s32_qn(c->mf0_Nm_q24, sgn_q16, 24U));
-
-    /* Late load: a change of the known load holds r2..r4 (header). */
-    if (p->primed && (in->load_Nm_q16 != p->load_prev_q16) && (c->load_hold_steps != 0U)) {
-      p->load_hold = c->load_hold_steps;
-      p->diag.load_holds = (p->diag.load_holds < UINT32_MAX) ? (p->diag.load_holds + 1U) : UINT32_MAX;
-    }
-    p->load_prev_q16 = in->load_Nm_q16;
-    if (!p->primed) {
-      canfdi_svf_reset(&p->svf_u, in->u_V_q16);
-      canfdi_svf_reset(&p->svf_i, xi);
-      canfdi_svf_reset(&p->svf_w, xw);
-      canfdi_svf_reset(&p->svf_z, z);
-      p->primed = true;
-    }
-    canfdi_svf_step(&p->svf_u, in->u_V_q16);
-    canfdi_svf_step(&p->svf_i, xi);
-    canfdi_svf_step(&p->svf_w, xw);
-    canfdi_svf_step(&p->svf_z, z);
-    u_f = canfdi_svf_y_q16(&p->svf_u);
-    u_d = canfdi_svf_dy_q16(&p->svf_u);
-    i_f = canfdi_svf_y_q16(&p->svf_i);
-    i_d = canfdi_svf_dy_q16(&p->svf_i);
-    i_d2 = canfdi_svf_d2y_q16(&p->svf_i);
-    w_f = canfdi_svf_y_q16(&p->svf_w);
-    w_d = canfdi_svf_dy_q16(&p->svf_w);
-    w_d2 = canfdi_svf_d2y_q16(&p->svf_w);
-    z_f = canfdi_svf_y_q16(&p->svf_z);
-    z_d = canfdi_svf_dy_q16(&p->svf_z);
-
-    /* r1 = U - R I - L dI - Psi w                                    [V] */
-    acc = pdcm_add_q16(0, u_f, false);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_R], i_f, PDCM_FRAC_I, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_L], i_d, PDCM_FRAC_I, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_PSI], w_f, PDCM_FRAC_W, true);
-    r[0] = pdcm_acc_out(p, acc);
-    /* r2 = Psi I - J dw - M_F1 w - z                                 [N m] */
-    acc = pdcm_mac(0, k[CANFDI_PDCM_K_PSI], i_f, PDCM_FRAC_I, false);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_J], w_d, PDCM_FRAC_W, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_F1], w_f, PDCM_FRAC_W, true);
-    acc = pdcm_add_q16(acc, z_f, true);
-    r[1] = pdcm_acc_out(p, acc);
-    /* r3 = cI I + cdI dI + cd2I d2I - (J/Psi) dU - (M_F1/Psi) U - z  [N m] */
-    acc = pdcm_mac(0, k[CANFDI_PDCM_K_CI], i_f, PDCM_FRAC_I, false);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CDI], i_d, PDCM_FRAC_I, false);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CD2I], i_d2, PDCM_FRAC_I, false);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_JP], u_d, PDCM_FRAC_U, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_FP], u_f, PDCM_FRAC_U, true);
-    acc = pdcm_add_q16(acc, z_f, true);
-    r[2] = pdcm_acc_out(p, acc);
-    /* r4 = U - cI w - cdI dw - cd2I d2w - (R/Psi) z - (L/Psi) dz     [V] */
-    acc = pdcm_add_q16(0, u_f, false);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CI], w_f, PDCM_FRAC_W, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CDI], w_d, PDCM_FRAC_W, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_CD2I], w_d2, PDCM_FRAC_W, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_RP], z_f, PDCM_FRAC_Z, true);
-    acc = pdcm_mac(acc, k[CANFDI_PDCM_K_LP], z_d, PDCM_FRAC_Z, true);
-    r[3] = pdcm_acc_out(p, acc);
-
-    /* Uncertainty bands: first-order propagation of the stated parameter
-     * uncertainties, sum over p of |dr/dp| dp on the filtered signals (the
-     * partial derivatives of the four equations, see the header). */
-    {
-      const int32_t dR = c->unc_ra_ohm_q24;
-      const int32_t dL = c->unc_la_H_q24;
-      const int32_t dJ = c->unc_j_kgm2_q24;
-      int64_t sr;
-      int64_t sl;
-      int64_t sj;
-      /* r1: dr/dR = -I, dr/dL = -dI */
-      sr = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], i_f, PDCM_FRAC_I, false);
-      sl = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], i_d, PDCM_FRAC_I, false);
-      unc[0] = canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL));
-      /* r2: dr/dJ = -dw */
-      sj = pdcm_mac(0, k[CANFDI_PDCM_K_ONE], w_d, PDCM_FRAC_W, false);
-      unc[1] = pdcm_unc_term(sj, dJ);
-      /* r3: dr/dR = (M_F1 I + J dI) / Psi, dr/dL = (M_F1 dI + J d2I) / Psi,
-       *     dr/dJ = (R dI + L d2I - dU) / Psi */
-      sr = pdcm_mac(0, k[CANFDI_PDCM_K_FP], i_f, PDCM_FRAC_I, false);
-      sr = pdcm_mac(sr, k[CANFDI_PDCM_K_JP], i_d, PDCM_FRAC_I, false);
-      sl = pdcm_mac(0, k[CANFDI_PDCM_K_FP], i_d, PDCM_FRAC_I, false);
-      sl = pdcm_mac(sl, k[CANFDI_PDCM_K_JP], i_d2, PDCM_FRAC_I, false);
-      sj = pdcm_mac(0, k[CANFDI_PDCM_K_RP], i_d, PDCM_FRAC_I, false);
-      sj = pdcm_mac(sj, k[CANFDI_PDCM_K_LP], i_d2, PDCM_FRAC_I, false);
-      sj = pdcm_mac(sj, k[CANFDI_PDCM_K_IP], u_d, PDCM_FRAC_U, true);
-      unc[2] = canfdi_add_s32_sat(canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL)),
-                                  pdcm_unc_term(sj, dJ));
-      /* r4: dr/dR = -(M_F1 w + J dw + z) / Psi,
-       *     dr/dL = -(M_F1 dw + J d2w + dz) / Psi, dr/dJ = -(R dw + L d2w) / Psi */
-      sr = pdcm_mac(0, k[CANFDI_PDCM_K_FP], w_f, PDCM_FRAC_W, false);
-      sr = pdcm_mac(sr, k[CANFDI_PDCM_K_JP], w_d, PDCM_FRAC_W, false);
-      sr = pdcm_mac(sr, k[CANFDI_PDCM_K_IP], z_f, PDCM_FRAC_Z, false);
-      sl = pdcm_mac(0, k[CANFDI_PDCM_K_FP], w_d, PDCM_FRAC_W, false);
-      sl = pdcm_mac(sl, k[CANFDI_PDCM_K_JP], w_d2, PDCM_FRAC_W, false);
-      sl = pdcm_mac(sl, k[CANFDI_PDCM_K_IP], z_d, PDCM_FRAC_Z, false);
-      sj = pdcm_mac(0, k[CANFDI_PDCM_K_RP], w_d, PDCM_FRAC_W, false);
-      sj = pdcm_mac(sj, k[CANFDI_PDCM_K_LP], w_d2, PDCM_FRAC_W, false);
-      unc[3] = canfdi_add_s32_sat(canfdi_add_s32_sat(pdcm_unc_term(sr, dR), pdcm_unc_term(sl, dL)),
-                                  pdcm_unc_term(sj, dJ));
-    }
-
-    /* Validity: the SVFs need settle steps after (re)start; r2..r4 hold
-     * only while the Coulomb term is +-M_F0, i.e. outside +-w_band, and
-     * again settle steps after re-entering that region (the filter still
-     * remembers the stuck phase). */
-    if (p->settle > 0U) {
-      p->settle = (uint16_t)(p->settle - 1U);
-    }
-    {
-      const int32_t wb = canfdi_asr32_rnd(c->w_band_rad_s_q16, CANFDI_PARITY_DCM_W_PRESCALE);
-      if ((w_f >= wb) || (w_f <= -wb)) {
-        p->w_ok = (p->w_ok < UINT16_MAX) ? (uint16_t)(p->w_ok + 1U) : p->w_ok;
-      } else {
-        p->w_ok = 0U;
-      }
-    }
-    if (p->settle == 0U) {
-      /* r1 and r4 carry R_A: not evaluable while it is being learnt. */
-      const bool ra_ok = (p->ra_learn_left == 0U);
-      valid = ra_ok ? 1U : 0U;
-      if ((p->w_ok >= c->settle_steps) && (p->load_hold == 0U)) {
-        valid |= ra_ok ? 0x0EU : 0x06U;
-      }
-    }
-    if (p->load_hold > 0U) {
-      p->load_hold = (uint16_t)(p->load_hold - 1U);
-    }
-
-    /* Slowly varying load: r2..r4 follow their own mean (time constant
-     * load_tau) while valid, so each keeps its decoupling. */
-    if (p->load_alpha_q31 != 0) {
-      for (j = 1U; j < CANFDI_PARITY_DCM_N_RES; j++) {
-        if ((valid & (1U << j)) != 0U) {
-          const int64_t d = canfdi_sub_s64_sat((int64_t)r[j] * 65536, p->bias_q32[j - 1U]);
-          p->bias_q32[j - 1U] =
-              canfdi_add_s64_sat(p->bias_q32[j - 1U], canfdi_mul_s64_q31(d, p->load_alpha_q31));
-        }
-        r[j] = canfdi_sub_s32_sat(
-            r[j], canfdi_sat_s64_to_s32(canfdi_asr64_rnd(p->bias_q32[j - 1U], 16U)));
-      }
-    }
-
-    /* Thresholds: the adaptive hook (excitation: the filtered U_A) plus
-     * the uncertainty band, capped at band.max; normalisation, flags. */
-    for (j = 0U; j < CANFDI_PARITY_DCM_N_RES; j++) {
-      const int32_t th = canfdi_clamp_s32(
-          canfdi_add_s32_sat(canfdi_adapt_step(&p->thr[j], u_f), unc[j]), 0, c->band[j].max);
-      const int64_t ra = ((int64_t)r[j] < 0) ? -(int64_t)r[j] : (int64_t)r[j];
-      p->out.thr_q16[j] = th;
-      p->out.r_q16[j] = r[j];
-      p->out.rn_q16[j] = canfdi_div_s32_qn(r[j], th, 16U);
-      if (((valid & (1U << j)) != 0U) && (ra > (int64_t)th)) {
-        exceed |= (uint8_t)(1U << j);
-      }
-    }
-    p->out.valid = valid;
-    p->out.exceed = exceed;
-
-    /* Adaptive R_A: least squares of r1 against I over a block; a block is
-     * used only if r1 was valid and below the gate throughout. */
-    if (c->ra_track != 0U) {
-      if (p->settle == 0U) {
-        const int32_t i_q16 = canfdi_shl32_sat(i_f, CANFDI_PARITY_DCM_I_PRESCALE);
-        const int32_t r1c = canfdi_clamp_s32(r[0], -PDCM_R1_SUM_CLAMP, PDCM_R1_SUM_CLAMP);
-        p->blk_rn = canfdi_add_s64_sat(p->blk_rn, (int64_t)p->out.rn_q16[0]);
-        p->blk_ri = canfdi_add_s64_sat(p->blk_ri, (int64_t)r1c * i_q16);
-        p->blk_ii = canfdi_add_s64_sat(p->blk_ii, (int64_t)i_q16 * i_q16);
-      } else {
-        p->blk_invalid = true;
-      }
-      p->blk_n = (uint16_t)(p->blk_n + 1U);
-      if (p->blk_n >= c->ra_block_steps) {
-        pdcm_ra_block(p);
-      }
-    }
-    p->out.ra_hat_ohm_q24 = p->ra_hat_ohm_q24;
-    p->diag.steps += (p->diag.steps < UINT32_MAX) ? 1U : 0U;
+    uint8_t valid;
+    x = pdcm_condition(p, in);
+    pdcm_late_load(p, in->load_Nm_q16);
+    s = pdcm_filter(p, in->u_V_q16, &x);
+    pdcm_residuals(p, &s, r);
+    pdcm_uncertainty(p, &s, unc);
+    valid = pdcm_validity(p, s.w_f);
+    pdcm_load_means(p, valid, r);
+    pdcm_thresholds(p, s.u_f, r, unc, valid);
+    pdcm_ra_track(p, s.i_f, r[0]);
+    canfdi_count_inc(&p->diag.steps);
     out = &p->out;
   }
   return out;
@@ -680,20 +753,20 @@ void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
   /* Base thresholds: ~6 x the fault-free noise sigma measured with the
    * reference noise model (see the header), rounded up. */
   static const int32_t base_q16[CANFDI_PARITY_DCM_N_RES] = {
-      (int32_t)CANFDI_QN_RATIO_(8, 100, 16),  /* r1 0.08 V */
-      (int32_t)CANFDI_QN_RATIO_(2, 100, 16),  /* r2 0.02 N m */
-      (int32_t)CANFDI_QN_RATIO_(2, 100, 16),  /* r3 0.02 N m */
-      (int32_t)CANFDI_QN_RATIO_(12, 100, 16), /* r4 0.12 V */
+      CANFDI_Q16_MILLI(80),  /* r1 0.08 V */
+      CANFDI_Q16_MILLI(20),  /* r2 0.02 N m */
+      CANFDI_Q16_MILLI(20),  /* r3 0.02 N m */
+      CANFDI_Q16_MILLI(120), /* r4 0.12 V */
   };
   if (cfg != NULL) {
-    cfg->ra_ohm_q24 = PDCM_Q24(152, 100);
-    cfg->la_H_q24 = PDCM_Q24(682, 100000);
-    cfg->psi_Vs_q24 = PDCM_Q24(33, 100);
-    cfg->j_kgm2_q24 = PDCM_Q24(192, 100000);
-    cfg->mf1_Nms_q24 = PDCM_Q24(36, 100000);
-    cfg->mf0_Nm_q24 = PDCM_Q24(11, 100);
+    cfg->ra_ohm_q24 = CANFDI_Q24(152, 100);
+    cfg->la_H_q24 = CANFDI_Q24(682, 100000);
+    cfg->psi_Vs_q24 = CANFDI_Q24(33, 100);
+    cfg->j_kgm2_q24 = CANFDI_Q24(192, 100000);
+    cfg->mf1_Nms_q24 = CANFDI_Q24(36, 100000);
+    cfg->mf0_Nm_q24 = CANFDI_Q24(11, 100);
     cfg->omega_c_rad_s = 100;
-    cfg->w_band_rad_s_q16 = 2 * PDCM_ONE_Q16;
+    cfg->w_band_rad_s_q16 = 2 * CANFDI_Q16_ONE;
     cfg->settle_steps = 60U;
     for (k = 0U; k < CANFDI_PARITY_DCM_N_RES; k++) {
       cfg->band[k].base = base_q16[k];
@@ -707,20 +780,20 @@ void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
     cfg->ra_track = 1U;
     cfg->ra_block_steps = 100U;
     cfg->ra_tau_s = 60U;
-    cfg->ra_i_min_A_q16 = PDCM_ONE_Q16; /* 1 A */
-    cfg->ra_gate_q16 = PDCM_ONE_Q16;
+    cfg->ra_i_min_A_q16 = CANFDI_Q16_ONE; /* 1 A */
+    cfg->ra_gate_q16 = CANFDI_Q16_ONE;
     cfg->ra_learn_blocks = 20U;
-    cfg->ra_rate_max_ohm_s_q24 = PDCM_Q24(1, 2000); /* 0.5 mOhm/s = 1.8 Ohm/h */
-    cfg->ra_min_ohm_q24 = PDCM_Q24(100, 100);
-    cfg->ra_max_ohm_q24 = PDCM_Q24(200, 100);
+    cfg->ra_rate_max_ohm_s_q24 = CANFDI_Q24(1, 2000); /* 0.5 mOhm/s = 1.8 Ohm/h */
+    cfg->ra_min_ohm_q24 = CANFDI_Q24(100, 100);
+    cfg->ra_max_ohm_q24 = CANFDI_Q24(200, 100);
     cfg->load_tau_s = 0U;
     cfg->load_hold_steps = 0U;
     /* Stated uncertainties (derivation in the header, "Thresholds"):
      * dR 10 mOhm = the tracker's lag bound, heating rate 0.17 mOhm/s times
      * ra_tau 60 s; dL 2 % and dJ 2 % = the identification class of the
-     * parameters (issue 4 acceptance of the estimator). */
-    cfg->unc_ra_ohm_q24 = PDCM_Q24(1, 100);
-    cfg->unc_la_H_q24 = PDCM_Q24(682 * 2, 10000000);
-    cfg->unc_j_kgm2_q24 = PDCM_Q24(192 * 2, 10000000);
+     * parameters (the acceptance of canfdi_est_dcm, docs/requirements.md). */
+    cfg->unc_ra_ohm_q24 = CANFDI_Q24(1, 100);
+    cfg->unc_la_H_q24 = CANFDI_Q24(682 * 2, 10000000);
+    cfg->unc_j_kgm2_q24 = CANFDI_Q24(192 * 2, 10000000);
   }
 }

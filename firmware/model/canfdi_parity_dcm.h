@@ -3,7 +3,7 @@
  * (Isermann, Fault-Diagnosis Systems, 2006, ch. 10: parity equations with
  * structured residuals), in fixed point, one 1 ms step at a time.
  *
- * The model. Armature and mechanics of the design brief:
+ * The model. Armature and mechanics of the DC motor (docs/design.md):
  *   (A)  L_A dI/dt = U_A - R_A I_A - Psi w
  *   (B)  J dw/dt   = Psi I_A - M_F1 w - M_F0 sgn(w) - M_L
  * Four residuals, each computed without one of the four signals U_A, I_A,
@@ -32,8 +32,9 @@
  * + Psi mean(w). The module therefore feeds the SVFs with (I_k + I_k-1)/2
  * and (w_k + w_k-1)/2 (trapezoidal interval means) and U_k as it is. With
  * the host_sim plant and its reference speed controller (setpoint steps of
- * +-20 rad/s) this cuts the peak fault-free r1 from 0.43 V to 0.04 V and r3
- * from 0.28 N m to 0.02 N m (double-precision exploration at wc 100 rad/s).
+ * +-20 rad/s) the peak fault-free r1 is 0.04 V with the interval means and
+ * 0.43 V with point samples, r3 0.02 N m against 0.28 N m
+ * (double-precision exploration at wc 100 rad/s).
  * The caller passes the measured U_A; for a drive without a voltage sensor,
  * pass the command that was applied over the interval.
  *
@@ -105,12 +106,13 @@
  * low current) and the block mean of r1 / threshold stayed within
  * +-ra_gate (default 1: inside the band on average; single noise peaks do
  * not stop the tracker): a fault moves r1 abruptly beyond the gate and
- * freezes the tracker, so an abrupt +10 % R_A (0.6 V at 4 A) stays visible in r1 and r4
- * for as long as it lasts, while the warm-up (a few mV per minute) is
+ * freezes the tracker, so an abrupt +10 % R_A (0.6 V at 4 A) stays visible
+ * in r1 and r4 for as long as it lasts, while the warm-up (a few mV per minute) is
  * absorbed. R_A is bounded to the plausible thermal range [ra_min, ra_max];
  * ra_at_limit reports an estimate pinned at a bound (an incipient R_A fault
  * slower than the tracker is absorbed like warm-up until it leaves that
- * range: the estimator of issue 4 sees it as R_A out of range). After init
+ * range: the parameter estimator, canfdi_est_dcm, sees it as R_A out of
+ * range). After init
  * and reset the first ra_learn_blocks accepted blocks learn R_A fast
  * (a quarter of the error per block, no gate, no rate bound, still inside
  * the range) because no history separates warm-up from fault at start; r1
@@ -143,9 +145,8 @@
  *   r4  dr/dR = -(M_F1 w + J dw + z) / Psi
  *       dr/dL = -(M_F1 dw + J d2w + dz) / Psi
  *       dr/dJ = -(R dw + L d2w) / Psi
- * (r3's R and J terms are the ones that made it leave its band in current
- * swings: (J dR / Psi) dI is 0.1 N m, 5 bands, for dR = 8 mOhm and
- * dI = 2000 A/s.) The stated uncertainties (cfg.unc_*, defaults):
+ * (r3's R and J terms dominate in current swings: (J dR / Psi) dI is
+ * 0.1 N m, 5 base bands, for dR = 8 mOhm and dI = 2000 A/s.) The stated uncertainties (cfg.unc_*, defaults):
  *   dR = 10 mOhm: the accuracy of the tracked R_A. The tracker is a
  *     first-order follower with time constant ra_tau (60 s), so it lags a
  *     winding heating at rate rho by rho ra_tau. Cold, the heating rate is
@@ -154,11 +155,11 @@
  *     of 3.4 mOhm. Bursts of excitation raise I_rms; the bound allows
  *     I_rms = 6.9 A (1.7 x nominal, 3 x the heat): rho = 0.17 mOhm/s,
  *     dR = rho ra_tau = 10 mOhm (0.7 % of R_A). (A faster tracker would
- *     shrink dR but absorb incipient R_A faults sooner; it is unchanged.
- *     Measured tracker error after learning in the 10 h bench: 8.6 mOhm.)
+ *     shrink dR but absorb incipient R_A faults sooner. Measured tracker
+ *     error after learning in the 10 h bench: 8.6 mOhm.)
  *   dL = 2 %, dJ = 2 %: the identification class of the parameters in use
- *     (issue 4 acceptance of the estimator: within 2 %, standard deviation
- *     below 2 %); datasheet tolerances (+-10..20 %) would widen the
+ *     (the acceptance of canfdi_est_dcm, docs/requirements.md: within 2 %,
+ *     standard deviation below 2 %); datasheet tolerances (+-10..20 %) would widen the
  *     transient bands by that factor: configure them so when L and J are
  *     not identified on the drive.
  *   Psi is not in the sum on purpose: its error acts in steady state
@@ -176,8 +177,8 @@
  * |d2I|, |dw|, |dU|: faults of the size of the base (friction +20 %,
  * 0.03 N m in r2/r3) are then inside the band during strong excitation and
  * seen only in the quieter phases (bench_symptoms, PRBS excitation:
- * friction +20 % r2 out of band 98 % -> 26 % of the time; their deviation
- * in sigma, the symptom, is unchanged). out.thr_q16 is the total band;
+ * friction +20 % is outside r2's band 26 % of the time; its deviation in
+ * sigma, the symptom, does not depend on the band). out.thr_q16 is the total band;
  * out.rn_q16 = r / threshold (1.0 = threshold).
  *
  * Scaling and overflow. Inputs Q16.16 in V, A, rad/s, N m. Parameters Q8.24
@@ -224,26 +225,26 @@
  *
  * Cost per canfdi_parity_dcm_step: 4 SVF steps of order 3, 4
  * canfdi_adapt_step, 22 coefficient terms for the residuals and 20 for the
- * uncertainty bands (plus 11 rounded 32x32 multiplies by the dp) (a 32x32->64 multiply, a run-time
- * 64-bit shift and a saturating add each), 4 canfdi_div_s32_qn (32/32 path
- * while |r| < 1 unit, else 64/64), and every ra_block_steps-th step the R_A
- * update (4 long divisions of 31 iterations). Measured executed
- * instructions per call (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 with
- * -icount, SysTick; 4000 calls on a synthetic operating point including
- * saturating inputs; min / mean / max, the max includes an R_A update):
- *   Cortex-M4    5 200 /  5 870 /  9 450
- *   Cortex-M0+  14 400 / 15 300 / 21 600  (ARMv6-M code on the same core:
- *               instruction counts, not cycles; ~0.45 ms at 48 MHz)
- * These figures predate the uncertainty bands and were not re-measured:
- * the 20 extra terms cost about as much as the 22 residual terms, so
- * expect roughly +25 % (M4 ~7 300 mean, M0+ ~19 000 mean, ~0.55 ms at
- * 48 MHz on M0+).
+ * uncertainty bands (a 32x32->64 multiply, a run-time 64-bit shift and a
+ * saturating add each) plus 11 rounded 32x32 multiplies by the dp, 4
+ * canfdi_div_s32_qn (32/32 path while |r| < 1 unit, else 64/64), and every
+ * ra_block_steps-th step the R_A update (4 long divisions of 31
+ * iterations). Measured executed instructions per call (arm-none-eabi-gcc
+ * 12 -Os, QEMU mps2-an386 with -icount, SysTick; default cfg, 4000 calls on
+ * a synthetic operating point around 100 rad/s, 4 A, 38 V with +-20 rad/s
+ * and +-0.5 A swings and 0.2 % full-scale (saturating) samples; min / mean
+ * / max, the max includes an R_A update):
+ *   Cortex-M4    6 600 /  7 700 / 11 000
+ *   Cortex-M0+  17 100 / 19 600 / 25 200  (ARMv6-M code on the same core:
+ *               instruction counts, not cycles; ~0.41 ms mean, 0.53 ms
+ *               max at 48 MHz)
  * Most of it is the four third-order SVFs and 64-bit arithmetic, which
- * ARMv6-M lacks. Code: 5.6 kB (M4), 6.7 kB (M0+) object text plus
- * canfdi_svf, adapt and fixp. Memory: sizeof(canfdi_parity_dcm_t) = 872
+ * ARMv6-M lacks. Code: 5.6 kB (M4), 6.8 kB (M0+) object text plus
+ * canfdi_svf, adapt and fixp. Memory: sizeof(canfdi_parity_dcm_t) = 888
  * bytes on a 32-bit target (4 SVFs 416, 4 thresholds 160, coefficients,
- * state), caller-owned; the configuration (164 bytes) is caller-owned and must outlive the
- * instance. No heap, no globals, no floating point; reentrant per instance.
+ * state), caller-owned; the configuration (168 bytes) is caller-owned and
+ * must outlive the instance. No heap, no globals, no floating point;
+ * reentrant per instance.
  *
  * Measured with host_sim (tests/unit/test_parity_dcm.c: Isermann's motor,
  * thermal model frozen at the cold 1.35 Ohm, reference speed controller at
@@ -251,8 +252,7 @@
  * I 0.02 A, w 0.2 rad/s on top of the 12-bit ADCs; default cfg):
  *   fault-free sigma   r1 12.2 mV   r2 3.3 mN m   r3 2.8 mN m   r4 18.4 mV
  *   (max |r| / band 0.34 / 0.60 / 0.54 / 0.46 over 17 s, 0.33 / 0.58 / 0.51
- *   / 0.44 with +-20 rad/s setpoint steps every second; 0.51 / 0.63 / 0.55
- *   / 0.63 before the uncertainty bands)
+ *   / 0.44 with +-20 rad/s setpoint steps every second)
  *   post-fault mean deviation in units of that sigma:
  *                          r1      r2      r3      r4
  *   U_A offset +1.2 V    +103      0      -0.4    +66
@@ -384,7 +384,9 @@ typedef struct {
   bool ra_at_limit;        /* the last R_A update hit ra_min/ra_max */
 } canfdi_parity_dcm_out_t;
 
-/* Monotone counters (saturating at UINT32_MAX). */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;
   uint32_t resets;             /* canfdi_parity_dcm_reset calls (init not counted) */
@@ -414,10 +416,12 @@ typedef struct {
   int64_t bias_q32[3];        /* load means of r2..r4 */
   int32_t i_prev_q16;
   int32_t w_prev_q16;
-  uint16_t blk_n;
-  uint16_t settle;
-  uint16_t w_ok;
-  uint16_t ra_learn_left;
+  uint16_t blk_n;             /* samples in the R_A block, 0 .. ra_block_steps - 1 */
+  uint16_t settle;            /* steps left before the residuals are valid,
+                               * settle_steps .. 0 */
+  uint16_t w_ok;              /* consecutive steps with |w_f| >= w_band,
+                               * saturating at UINT16_MAX */
+  uint16_t ra_learn_left;     /* fast-learning blocks left, ra_learn_blocks .. 0 */
   uint16_t load_hold;         /* steps left of the late-load hold */
   int32_t load_prev_q16;      /* known load of the last step */
   bool blk_invalid;

@@ -8,10 +8,12 @@
  * motor current i, the voltage the bridge applied over the last interval
  * (the previous command, limited here to +-supply; unknown while the bridge
  * is off, hence `enabled`), the measured bridge supply. Angles from the
- * potentiometers: theta1 = (TPS1 - tps1_zero) / slope,
- * theta2 = (tps2_zero - TPS2) / slope; a voltage outside
- * [tps_min, tps_max] marks that sensor out of range (open/short: the range
- * check of another module names it; here it only drops out).
+ * potentiometers through their characteristics (model/canfdi_tps.h):
+ * theta1 from cfg.tps1, theta2 from cfg.tps2, a complementary pair
+ * (tps2.slope = -tps1.slope, so TPS1 + TPS2 = tps1.zero + tps2.zero =
+ * tps_sum at every angle); a voltage outside [tps_min, tps_max] marks that
+ * sensor out of range (open/short: the range check of another module names
+ * it; here it only drops out).
  *
  * The residuals (index, unit):
  *   CORR  r = LP(TPS1 + TPS2 - tps_sum)                             [V]
@@ -33,11 +35,11 @@
  *         two and the previous increment, so the jump is outvoted; theta_arm
  *         leaks towards the TPS mean (1/2^8 per step) while the two agree,
  *         which bounds its drift. (Switching between the sensors every step
- *         would inject white speed noise: a plain median of three raised
- *         the fault-free noise of ARM from 2 mV to 28 mV.) A constant TPS offset has
- *         no derivative, so ARM is decoupled from TPS drift, from the very
- *         first sample of a jump; it sees R (dR i), K, an open circuit and
- *         current-sensor errors.
+ *         would inject white speed noise: with a plain median of three the
+ *         fault-free noise of ARM is 28 mV instead of 2 mV.) A constant
+ *         TPS offset has no derivative, so ARM is decoupled from TPS drift,
+ *         from the very first sample of a jump; it sees R (dR i), K, an
+ *         open circuit and current-sensor errors.
  *   POS1  r = LP(theta1 - theta_hat),  POS2  r = LP(theta2 - theta_hat)  [rad]
  *         theta_hat from the valve observer below. LP is a first-order
  *         low-pass with time constant res_tau (noise), identical on the
@@ -74,7 +76,7 @@
  *              poor there; an offset, even a drifting one, barely changes
  *              within those few steps. Measured coasting drift with the
  *              test plant: ~5 mrad over 20 s of 20-deg strokes every 0.5 s;
- *        TPS1 / TPS2  once, while coasting *        TPS1 / TPS2  once, while coasting, one position residual is more
+ *        TPS1 / TPS2  once, while coasting, one position residual is more
  *              than select_ratio (4) times the other and above its band,
  *              with the valve at rest (|dtheta/dt| <= rest_w), for
  *              select_steps (20) consecutive steps: the model agrees with
@@ -169,13 +171,14 @@
  * (f = 0) the band is the base, 0.012 rad: a TPS offset of 2 % of full
  * scale (0.1 V = 0.039 rad) stays 3 x outside in steady state; during and
  * just after a large stroke it can be inside (accepted: the correlation
- * residual CORR still sees it at once). Before this, closing strokes of
- * more than ~40 deg drove POS1/POS2 to 1.75 x the fixed band in the 10 h
- * bench; with it, 0.44 (bench_longrun).
+ * residual CORR still sees it at once). In the 10 h bench (bench_longrun)
+ * the fault-free POS1/POS2 peak at 0.44 of this band, where closing
+ * strokes of more than ~40 deg reach 1.75 times a fixed band.
  * out.rn_q16 = r / threshold (1.0 = threshold); exceed = valid and beyond.
  *
- * Scaling and overflow. Inputs Q16.16 (V, A). Angles Q16.16 rad; slope
- * Q16.16 V/rad; mechanical and electrical parameters Q8.24. Torques and the
+ * Scaling and overflow. Inputs Q16.16 (V, A). Angles Q16.16 rad, from the
+ * TPS characteristics (canfdi_tps.h: 1 / |slope| in Q8.24, exact to 1 LSB);
+ * mechanical and electrical parameters Q8.24. Torques and the
  * armature voltage balance are Q40 in int64 (Q24 x Q16.16 exact products,
  * saturating sums), reduced to Q24 before the division by J (T/J as Q24)
  * or K (1/K as Q24) -> Q48 -> Q32. Observer states theta_hat and w_hat are
@@ -205,12 +208,14 @@
  * Cost per canfdi_parity_thr_step: 3 SVF steps of order 3, 4
  * canfdi_adapt_step, 4 canfdi_div_s32_qn, ~20 64-bit multiplies and ~60
  * saturating 64-bit adds/shifts. Measured executed instructions per call
- * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; 4000 calls,
- * synthetic motion including out-of-range inputs; min / mean / max):
- *   Cortex-M4    3 900 /  5 200 /  5 300
- *   Cortex-M0+  10 200 / 13 100 / 13 500  (instruction counts)
- * Code: 5.3 kB (M4), 6.2 kB (M0+) plus canfdi_svf, adapt and fixp.
- * Memory: sizeof(canfdi_parity_thr_t) = 712 bytes on a 32-bit target,
+ * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; default cfg,
+ * 4000 calls of synthetic strokes between 0.3 and 0.8 rad with current
+ * swings, clipped and out-of-range samples and bridge-off phases; min /
+ * mean / max):
+ *   Cortex-M4    4 300 /  5 300 /  5 300
+ *   Cortex-M0+  11 000 / 13 400 / 13 600  (instruction counts)
+ * Code: 5.1 kB (M4), 6.0 kB (M0+) plus canfdi_tps, svf, adapt and fixp.
+ * Memory: sizeof(canfdi_parity_thr_t) = 736 bytes on a 32-bit target,
  * caller-owned; the configuration (188 bytes) must outlive the instance.
  * No heap, no globals, no floating point; reentrant per instance.
  */
@@ -221,6 +226,7 @@
 #include "core/canfdi_fixp.h"
 #include "detect/canfdi_adapt.h"
 #include "model/canfdi_svf.h"
+#include "model/canfdi_tps.h"
 
 #define CANFDI_PARITY_THR_N_RES 4U
 #define CANFDI_PARITY_THR_CORR 0U /* TPS1 + TPS2 - sum, V */
@@ -236,8 +242,9 @@
 
 /*
  * Configuration, caller-owned, must outlive the instance (thresholds point
- * into band[]). Domain (else -CANFDI_EINVAL): TPS zeros 0..5 V, slope
- * 0.1..10 V/rad, sum 0..10 V, 0 <= tps_min <= tps_max <= 10 V; i_max
+ * into band[]). Domain (else -CANFDI_EINVAL): tps1 and tps2 valid for
+ * canfdi_tps_cal_check and complementary (tps2.slope = -tps1.slope);
+ * 0 <= tps_min <= tps_max <= 10 V; i_max
  * > 0 and <= 100 A; R 0.01..100 Ohm, L 0..0.1 H, K 0.01..10 N m/A,
  * J 1e-4..1 kg m^2, B, spring, pretension, friction 0..10; max 0.1..4 rad,
  * 0 <= limp_home <= max, lh_width 1e-4..0.1 rad; wc 20..1000 rad/s;
@@ -246,10 +253,8 @@
  * canfdi_adapt with base > 0.
  */
 typedef struct {
-  int32_t tps1_zero_V_q16;     /* TPS1 at theta = 0 (0.5 V) */
-  int32_t tps2_zero_V_q16;     /* TPS2 at theta = 0 (4.5 V) */
-  int32_t tps_slope_V_rad_q16; /* |dTPS/dtheta| (4 V per 90 deg) */
-  int32_t tps_sum_V_q16;       /* TPS1 + TPS2 (5 V) */
+  canfdi_tps_cal_t tps1;       /* TPS1 characteristic (model/canfdi_tps.h) */
+  canfdi_tps_cal_t tps2;       /* TPS2: the complement, slope -tps1.slope */
   int32_t tps_min_V_q16;       /* in-range window (0.25 .. 4.75 V) */
   int32_t tps_max_V_q16;
   int32_t i_max_A_q16;         /* |i| at/above: current sensor clipped */
@@ -303,6 +308,9 @@ typedef struct {
   int32_t theta2_rad_q16;
 } canfdi_parity_thr_out_t;
 
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t steps;
   uint32_t resets;        /* canfdi_parity_thr_reset calls (init not counted) */
@@ -318,7 +326,8 @@ typedef struct {
   canfdi_svf_t svf_i;
   canfdi_svf_t svf_th;
   canfdi_adapt_t thr[CANFDI_PARITY_THR_N_RES];
-  int32_t inv_slope_q24;  /* 1 / slope, rad/V */
+  canfdi_tps_t tps[2];    /* TPS1, TPS2 characteristics, prepared */
+  int32_t tps_sum_V_q16;  /* TPS1 + TPS2 = tps1.zero + tps2.zero */
   int32_t t_over_j_q24;   /* T / J */
   int32_t l_over_t_q24;   /* L / T */
   int32_t inv_k_q24;      /* 1 / K */
@@ -338,10 +347,14 @@ typedef struct {
   int64_t th_arm_q32;      /* angle for dtheta/dt (see ARM), Q32 */
   int64_t th_arm_prev_q32;
   int64_t inc_prev_q32;
-  uint16_t settle;
-  uint16_t arm_ok;
-  uint16_t cand_n;
-  uint16_t in_band_n;
+  uint16_t settle;        /* steps left before the residuals are valid,
+                           * settle_steps .. 0 */
+  uint16_t arm_ok;        /* consecutive steps ARM could be formed,
+                           * saturating at UINT16_MAX */
+  uint16_t cand_n;        /* consecutive steps `cand` was the candidate,
+                           * saturating at UINT16_MAX */
+  uint16_t in_band_n;     /* consecutive steps CORR was inside its band,
+                           * saturating at UINT16_MAX */
   uint8_t ok_prev;
   uint8_t src;
   uint8_t cand;
@@ -351,12 +364,12 @@ typedef struct {
   canfdi_parity_thr_diag_t diag;
 } canfdi_parity_thr_t;
 
-/* The substitute DV-E5 class valve of the design brief (R 1.5, L 1.5 mH,
+/* The substitute DV-E5 class valve of docs/design.md (R 1.5, L 1.5 mH,
  * K 0.383, J 0.0021, B 0.0088, spring 0.087, pretension 0.396, friction
- * 0.284, limp-home 6.5 deg, 90 deg travel; TPS 0.5 + 4 theta/90 deg and
- * 4.5 - 4 theta/90 deg), wc 100 rad/s, lambda 30 rad/s, emf gain 0.3,
- * jump 0.01 rad, select ratio 4 for 20 steps at rest (< 0.2 rad/s),
- * release after 200 steps, bands CORR 0.01 V (~16 sigma of the filtered
+ * 0.284, limp-home 6.5 deg, 90 deg travel; TPS as canfdi_tps_cal_default:
+ * 0.5 + 4 theta/90 deg and 4.5 - 4 theta/90 deg), wc 100 rad/s, lambda
+ * 30 rad/s, emf gain 0.3, jump 0.01 rad, select ratio 4 for 20 steps at
+ * rest (< 0.2 rad/s), release after 200 steps, bands CORR 0.01 V (~16 sigma of the filtered
  * noise), ARM 0.05 V + 9.5e-5 s x filtered |du/dt| (stroke transients),
  * POS 0.012 rad (0.7 deg, ~30 % of a 2 % TPS offset). NULL ignored. */
 void canfdi_parity_thr_default_cfg(canfdi_parity_thr_cfg_t *cfg);

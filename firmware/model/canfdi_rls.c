@@ -3,6 +3,8 @@
  */
 #include "model/canfdi_rls.h"
 
+#include "core/canfdi_count.h"
+
 #define NMAX CANFDI_CFG_RLS_MAX_PARAMS
 
 typedef canfdi_rls_xf_t xf_t;
@@ -269,7 +271,7 @@ void canfdi_rls_reset(canfdi_rls_t *r, bool keep_theta)
   r->err = xf_make(0, 0);
   r->primed = false;
   r->excited = false;
-  r->diag.resets += 1U;
+  canfdi_count_inc(&r->diag.resets);
 }
 
 static bool rls_gated(const canfdi_rls_t *r, unsigned i)
@@ -342,7 +344,7 @@ bool canfdi_rls_update(canfdi_rls_t *r, const int32_t phi_q16[], int32_t y_q16)
   r->excited = go;
 
   if (!go) {
-    r->diag.skipped += 1U;
+    canfdi_count_inc(&r->diag.skipped);
   } else {
     xf_t alpha = r->lambda;
     xf_t inv_alpha = r->inv_lambda;
@@ -365,7 +367,7 @@ bool canfdi_rls_update(canfdi_rls_t *r, const int32_t phi_q16[], int32_t y_q16)
       xf_t dj = xf_mul(xf_mul(r->d[j], xf_mul(alpha, inv_new)), r->inv_lambda);
       if ((dj.m <= 0) || (dj.e < D_FLOOR_E)) {
         dj = xf_make(XF_MANT_LO, D_FLOOR_E);
-        r->diag.saturations += 1U;
+        canfdi_count_inc(&r->diag.saturations);
       }
       r->d[j] = dj;
       b[j] = g[j];
@@ -390,9 +392,9 @@ bool canfdi_rls_update(canfdi_rls_t *r, const int32_t phi_q16[], int32_t y_q16)
       for (j = 0U; j < n; j++) {
         r->d[j] = xf_mul(r->d[j], c);
       }
-      r->diag.trace_clips += 1U;
+      canfdi_count_inc(&r->diag.trace_clips);
     }
-    r->diag.updates += 1U;
+    canfdi_count_inc(&r->diag.updates);
   }
   return go;
 }

@@ -70,19 +70,20 @@
  *   Total ~ 3 n^2 + 14 n xf operations + n divisions: ~ 50 for n = 3,
  *   ~ 180 for n = 6. A skipped update costs the excitation measure and the
  *   prediction error only (7 n).
- * Measured executed instructions per call on the host (x86-64, gcc -O2,
- * no sanitizers, valgrind/callgrind inclusive counts, mean over 2000 calls
- * with random data; the loop counts are data-independent, so the mean is
- * close to the worst case):
- *   n = 3: 7.6 k   n = 4: 11.3 k   n = 5: 15.7 k   n = 6: 20.7 k
- *   skipped update (n = 3): 3.5 k
- * i.e. ~150 x86 instructions per xf operation. Cortex-M has not been
- * measured yet; expect about the same count on an M4 (SMULL, CLZ-free
- * bit-length search) and 1.5-2x on an M0+ (every 32x32->64 multiply is an
- * __aeabi_lmul call), i.e. ~12-15 k instructions for n = 3 and ~35-40 k for
- * n = 6 on an M0+: too much for every 1 ms step on a 48 MHz M0+, which is
- * why the estimators decimate the update (every 2..5 steps) and never run
- * two updates in one step.
+ * Measured executed instructions per call (arm-none-eabi-gcc 12 -Os, QEMU
+ * mps2-an386 -icount, SysTick; 2000 calls with random regressors of
+ * magnitude <= 1, gate always open; the loop counts are data-independent,
+ * so the mean is close to the worst case), mean / max:
+ *               Cortex-M4          Cortex-M0+ code
+ *   n = 3       11.3 k / 11.5 k    20.3 k / 20.6 k
+ *   n = 4       17.1 k / 17.3 k    30.3 k / 30.7 k
+ *   n = 5       23.8 k / 24.0 k    42.0 k / 42.5 k
+ *   n = 6       31.6 k / 31.9 k    55.4 k / 56.0 k
+ *   skipped update (n = 3): 1.35 k (M4), 2.29 k (M0+)
+ * i.e. ~230 (M4) and ~400 (M0+) instructions per xf operation: too much
+ * for every 1 ms step on a 48 MHz M0+ (n = 3 takes 0.42 ms), which is why
+ * the estimators decimate the update (every 2..5 steps) and never run two
+ * updates in one step.
  * Memory: sizeof(canfdi_rls_t) = 432 bytes with the default
  * CANFDI_CFG_RLS_MAX_PARAMS = 6 on a 32-bit target (8 bytes per xf:
  * n(n-1)/2 for U, 4n for theta, D and the excitation filters, 4 scalars;
@@ -119,7 +120,9 @@ typedef struct {
   int32_t theta0_q16[CANFDI_CFG_RLS_MAX_PARAMS]; /* initial physical theta */
 } canfdi_rls_cfg_t;
 
-/* Monotone counters. */
+/* Diagnostics counters: monotone, saturating at UINT32_MAX
+ * (core/canfdi_count.h); init clears them, nothing else does. No decision
+ * of the firmware depends on them. */
 typedef struct {
   uint32_t updates;     /* updates applied */
   uint32_t skipped;     /* updates skipped by the excitation gate */

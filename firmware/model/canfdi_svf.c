@@ -3,6 +3,7 @@
  */
 #include "model/canfdi_svf.h"
 
+#include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
 /* h = wc T / 2 = wc * STEP_US / 2e6. */
@@ -79,7 +80,7 @@ static int32_t svf_out_q16(int64_t v, int32_t wc, unsigned k, uint32_t *sat)
   x = canfdi_asr64_rnd(x, 16U);
   y = canfdi_sat_s64_to_s32(x);
   if ((int64_t)y != x) {
-    *sat += 1U;
+    canfdi_count_inc(sat);
   }
   return y;
 }
@@ -149,7 +150,7 @@ void canfdi_svf_reset(canfdi_svf_t *f, int32_t x0_q16)
   f->y_q16 = x0_q16;
   f->dy_q16 = 0;
   f->d2y_q16 = 0;
-  f->diag.resets += 1U;
+  canfdi_count_inc(&f->diag.resets);
 }
 
 void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16)
@@ -201,7 +202,7 @@ void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16)
     s = f->v_q32[2];
   }
   f->d2y_q16 = svf_out_q16(s, f->cfg.omega_c_rad_s, 2U, &f->diag.out_saturations);
-  f->diag.steps += 1U;
+  canfdi_count_inc(&f->diag.steps);
 }
 
 int32_t canfdi_svf_y_q16(const canfdi_svf_t *f)

@@ -207,10 +207,11 @@ struct PthrRef {
 
   explicit PthrRef(const canfdi_parity_thr_cfg_t *c)
       : cfg(c), su(3, c->omega_c_rad_s), si(3, c->omega_c_rad_s), sth(3, c->omega_c_rad_s) {
-    z1 = q16d(c->tps1_zero_V_q16);
-    z2 = q16d(c->tps2_zero_V_q16);
-    slope = q16d(c->tps_slope_V_rad_q16);
-    sum = q16d(c->tps_sum_V_q16);
+    // complementary characteristics: tps2.slope = -tps1.slope
+    z1 = q16d(c->tps1.zero_V_q16);
+    z2 = q16d(c->tps2.zero_V_q16);
+    slope = q16d(c->tps1.slope_V_rad_q16);
+    sum = z1 + z2;
     vmin = q16d(c->tps_min_V_q16);
     vmax = q16d(c->tps_max_V_q16);
     imax = q16d(c->i_max_A_q16);

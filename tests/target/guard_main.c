@@ -39,6 +39,7 @@
 #include "model/canfdi_est_thr.h"
 #include "model/canfdi_parity_dcm.h"
 #include "model/canfdi_parity_thr.h"
+#include "model/canfdi_tps.h"
 #include "ft/canfdi_actmgr.h"
 #include "ft/canfdi_degrade.h"
 #include "ft/canfdi_vote.h"
@@ -369,6 +370,7 @@ static void guard_est_dcm(void)
   sink32(canfdi_est_dcm_j_q24(&est));
   sink32(canfdi_est_dcm_mf1_q24(&est));
   sink32(canfdi_est_dcm_mc_q16(&est));
+  sink32(canfdi_est_dcm_has_run(&est) ? 1 : 0);
   sink32(canfdi_est_dcm_excited(&est) ? 1 : 0);
   sink32(canfdi_est_dcm_arm_converged(&est) ? 1 : 0);
   sink32(canfdi_est_dcm_mech_converged(&est) ? 1 : 0);
@@ -400,6 +402,7 @@ static void guard_est_thr(void)
   sink32(canfdi_est_thr_fast_spring_dev_q16(&est));
   sink32(canfdi_est_thr_fast_friction_dev_q16(&est));
   sink32(canfdi_est_thr_fast_valid(&est) ? 1 : 0);
+  sink32(canfdi_est_thr_has_run(&est) ? 1 : 0);
   sink32(canfdi_est_thr_excited(&est) ? 1 : 0);
   sink32(canfdi_est_thr_el_converged(&est) ? 1 : 0);
   sink32(canfdi_est_thr_mech_converged(&est) ? 1 : 0);
@@ -580,6 +583,19 @@ static void guard_parity_dcm(void)
   sink32((o != NULL) ? o->rn_q16[3] : 0);
   sink32((int32_t)canfdi_parity_dcm_diag(&p)->steps);
   canfdi_parity_dcm_reset(&p);
+}
+
+static void guard_tps(void)
+{
+  static canfdi_tps_cal_t cal[2];
+  static canfdi_tps_t t;
+
+  canfdi_tps_cal_default(&cal[0], &cal[1]);
+  cal[in_n & 1U].zero_V_q16 = in_s32[0];
+  sink32(canfdi_tps_cal_check(&cal[0]));
+  sink32(canfdi_tps_init(&t, &cal[in_n & 1U]));
+  sink32(canfdi_tps_V_to_rad_q16(&t, in_s32[1]));
+  sink32(canfdi_tps_rad_to_V_q16(&cal[0], in_s32[2]));
 }
 
 static void guard_parity_thr(void)
@@ -834,6 +850,7 @@ int main(void)
   guard_est_dcm();
   guard_est_thr();
   guard_parity_dcm();
+  guard_tps();
   guard_parity_thr();
   guard_ft();
   guard_ctrl();

@@ -507,6 +507,39 @@ START_TEST(test_init_rejects_bad_config)
 }
 END_TEST
 
+/* Diagnostics counters saturate at UINT32_MAX; the sample index is state
+ * and wraps modulo 2^32 by design. */
+START_TEST(test_counters_saturate_index_wraps)
+{
+  canfdi_cusum_cfg_t cfg = cfg_std(0.5, 4.0);
+  cfg.restart = CANFDI_CUSUM_RESTART_LATCH;
+  canfdi_cusum_t s;
+  ck_assert_int_eq(canfdi_cusum_init(&s, &cfg), CANFDI_OK);
+  ck_assert_uint_eq(canfdi_cusum_last_alarm(&s).side, CANFDI_CUSUM_NONE);
+  s.diag.alarms_hi = UINT32_MAX;
+  s.diag.latched_samples = UINT32_MAX - 1U;
+  s.diag.restarts = UINT32_MAX - 1U;
+  s.step = UINT32_MAX - 2U;
+  uint32_t side = 0U;
+  while (side == 0U) {
+    side = canfdi_cusum_step(&s, 2 * SIGMA_LSB);
+  }
+  ck_assert_uint_eq(side, CANFDI_CUSUM_HI);
+  ck_assert_uint_eq(canfdi_cusum_last_alarm(&s).side, CANFDI_CUSUM_HI);
+  ck_assert_uint_eq(canfdi_cusum_diag(&s).alarms_hi, UINT32_MAX);
+  for (int k = 0; k < 3; k++) {
+    ck_assert_uint_eq(canfdi_cusum_step(&s, 0), 0U);
+  }
+  ck_assert_uint_eq(canfdi_cusum_diag(&s).latched_samples, UINT32_MAX);
+  canfdi_cusum_restart(&s);
+  canfdi_cusum_restart(&s);
+  ck_assert_uint_eq(canfdi_cusum_diag(&s).restarts, UINT32_MAX);
+  /* the index went past 2^32 - 1 and wrapped (a few samples to the alarm,
+   * three latched ones) */
+  ck_assert_uint_lt(canfdi_cusum_step_index(&s), 100U);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *su = suite_create("cusum");
@@ -536,6 +569,10 @@ static Suite *make_suite(void)
   tc = tcase_create("restart");
   tcase_add_test(tc, test_latch_and_restart);
   tcase_add_loop_test(tc, test_auto_restart_head_start, 0, 2);
+  suite_add_tcase(su, tc);
+
+  tc = tcase_create("counters");
+  tcase_add_test(tc, test_counters_saturate_index_wraps);
   suite_add_tcase(su, tc);
   return su;
 }

@@ -416,6 +416,31 @@ START_TEST(test_late_load_hold)
 }
 END_TEST
 
+/* has_run is state (stepped since init, kept by reset), not a counter; the
+ * diagnostics counters saturate at UINT32_MAX. */
+START_TEST(test_has_run_and_counters_saturate)
+{
+  canfdi_est_dcm_cfg_t c;
+  canfdi_est_dcm_default_cfg(&c);
+  ck_assert_int_eq(canfdi_est_dcm_init(&rig.est, &c), CANFDI_OK);
+  ck_assert(!canfdi_est_dcm_has_run(&rig.est));
+  canfdi_est_dcm_reset(&rig.est, true);
+  ck_assert(!canfdi_est_dcm_has_run(&rig.est));
+  rig.est.diag.steps = UINT32_MAX - 1U;
+  rig.est.diag.resets = UINT32_MAX;
+  canfdi_est_dcm_step(&rig.est, q16(38.0), q16(4.0), q16(100.0));
+  ck_assert(canfdi_est_dcm_has_run(&rig.est));
+  canfdi_est_dcm_step(&rig.est, q16(38.0), q16(4.0), q16(100.0));
+  ck_assert_uint_eq(canfdi_est_dcm_diag(&rig.est)->steps, UINT32_MAX);
+  canfdi_est_dcm_reset(&rig.est, true);
+  ck_assert(canfdi_est_dcm_has_run(&rig.est));
+  ck_assert_uint_eq(canfdi_est_dcm_diag(&rig.est)->resets, UINT32_MAX);
+  ck_assert_int_eq(canfdi_est_dcm_init(&rig.est, &c), CANFDI_OK);
+  ck_assert(!canfdi_est_dcm_has_run(&rig.est));
+  ck_assert_uint_eq(canfdi_est_dcm_diag(&rig.est)->steps, 0U);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("est_dcm");
@@ -424,6 +449,7 @@ static Suite *make_suite(void)
   tc = tcase_create("config");
   tcase_add_test(tc, test_cfg);
   tcase_add_test(tc, test_late_load_hold);
+  tcase_add_test(tc, test_has_run_and_counters_saturate);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("acceptance");

@@ -273,6 +273,31 @@ START_TEST(test_sum_saturates)
 }
 END_TEST
 
+/* Diagnostics counters saturate at UINT32_MAX; bit_count (state) stays in
+ * 0 .. bit_steps - 1 and the output does not depend on the counters. */
+START_TEST(test_counters_saturate)
+{
+  canfdi_excite_t e;
+  canfdi_excite_t ref;
+  const canfdi_excite_cfg_t c = prbs_cfg(3000U);
+  ck_assert_int_eq(canfdi_excite_init(&e, &c), CANFDI_OK);
+  ck_assert_int_eq(canfdi_excite_init(&ref, &c), CANFDI_OK);
+  canfdi_excite_enable(&e, true);
+  canfdi_excite_enable(&ref, true);
+  e.diag.steps = UINT32_MAX - 1U;
+  e.diag.prbs_bits = UINT32_MAX - 1U;
+  e.diag.active_steps = UINT32_MAX;
+  for (int k = 0; k < 10; k++) {
+    ck_assert_int_eq(canfdi_excite_step_q16(&e), canfdi_excite_step_q16(&ref));
+    ck_assert_uint_lt(e.bit_count, e.bit_steps);
+  }
+  ck_assert_uint_eq(canfdi_excite_diag(&e)->steps, UINT32_MAX);
+  ck_assert_uint_eq(canfdi_excite_diag(&e)->prbs_bits, UINT32_MAX);
+  ck_assert_uint_eq(canfdi_excite_diag(&e)->active_steps, UINT32_MAX);
+  ck_assert_uint_eq(canfdi_excite_diag(&ref)->prbs_bits, 4U); /* 10 steps of 3 */
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("excite");
@@ -293,6 +318,10 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_sine_table);
   tcase_add_test(tc, test_sine_output_and_gating);
   tcase_add_test(tc, test_sum_saturates);
+  suite_add_tcase(s, tc);
+
+  tc = tcase_create("counters");
+  tcase_add_test(tc, test_counters_saturate);
   suite_add_tcase(s, tc);
   return s;
 }

@@ -293,6 +293,31 @@ START_TEST(test_reset)
 }
 END_TEST
 
+/* The diagnostics counters saturate at UINT32_MAX (core/canfdi_count.h)
+ * instead of wrapping to 0: set them next to the maximum and count on. */
+START_TEST(test_counters_saturate)
+{
+  canfdi_limit_cfg_t c = both_cfg(-10, -5, 5, 10);
+  canfdi_limit_t l;
+  ck_assert_int_eq(canfdi_limit_init(&l, &c), CANFDI_OK);
+  l.diag.above_events = UINT32_MAX - 1U;
+  l.diag.below_events = UINT32_MAX;
+  l.diag.steps_violated = UINT32_MAX - 1U;
+  ck_assert_int_eq(sym(&l, 11), CANFDI_LIMIT_ABOVE_MAX);
+  ck_assert_uint_eq(l.diag.above_events, UINT32_MAX);
+  ck_assert_uint_eq(l.diag.steps_violated, UINT32_MAX);
+  ck_assert_int_eq(sym(&l, 0), CANFDI_LIMIT_IN_BAND);
+  ck_assert_int_eq(sym(&l, 11), CANFDI_LIMIT_ABOVE_MAX); /* a new event */
+  ck_assert_uint_eq(l.diag.above_events, UINT32_MAX);
+  ck_assert_int_eq(sym(&l, -11), CANFDI_LIMIT_BELOW_MIN);
+  ck_assert_uint_eq(l.diag.below_events, UINT32_MAX);
+  ck_assert_uint_eq(l.diag.steps_violated, UINT32_MAX);
+  /* the symptom logic is unaffected by saturated counters */
+  ck_assert_int_eq(sym(&l, -7), CANFDI_LIMIT_BELOW_MIN);
+  ck_assert_int_eq(sym(&l, -4), CANFDI_LIMIT_IN_BAND);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("limit");
@@ -314,6 +339,10 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_debounce_timing, 0, N_DEB_CASES);
   tcase_add_test(tc, test_intermittent);
   tcase_add_test(tc, test_reset);
+  suite_add_tcase(s, tc);
+
+  tc = tcase_create("counters");
+  tcase_add_test(tc, test_counters_saturate);
   suite_add_tcase(s, tc);
   return s;
 }

@@ -212,7 +212,7 @@ END_TEST
 static void break_cfg(canfdi_parity_thr_cfg_t *c, int i)
 {
   switch (i) {
-  case 0: c->tps_slope_V_rad_q16 = 0; break;
+  case 0: c->tps1.slope_V_rad_q16 = 0; break;
   case 1: c->tps_min_V_q16 = c->tps_max_V_q16 + 1; break;
   case 2: c->i_max_A_q16 = 0; break;
   case 3: c->r_ohm_q24 = 0; break;
@@ -227,6 +227,8 @@ static void break_cfg(canfdi_parity_thr_cfg_t *c, int i)
   case 12: c->select_ratio = 0U; break;
   case 13: c->band[3].base = 0; break;
   case 14: c->res_tau_us = 20000000U; break;
+  case 15: c->tps2.slope_V_rad_q16 = c->tps1.slope_V_rad_q16; break; /* not complementary */
+  case 16: c->tps2.zero_V_q16 = 5 * 65536 + 1; break;
   default: c->max_rad_q16 = 5 * 65536; break;
   }
 }
@@ -468,7 +470,7 @@ static Suite *make_suite(void)
 
   tc = tcase_create("config");
   tcase_add_test(tc, default_cfg_valid);
-  tcase_add_loop_test(tc, invalid_cfg_rejected, 0, 16);
+  tcase_add_loop_test(tc, invalid_cfg_rejected, 0, 18);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("fault_free");

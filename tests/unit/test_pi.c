@@ -452,6 +452,35 @@ START_TEST(test_random_extremes)
 }
 END_TEST
 
+/* The diagnostics counters saturate at UINT32_MAX instead of wrapping, and
+ * the control law does not depend on them. */
+START_TEST(test_counters_saturate)
+{
+  const canfdi_pi_cfg_t c = base_cfg();
+  canfdi_pi_t pi = make_pi(&c);
+  canfdi_pi_t ref = make_pi(&c);
+  const canfdi_pi_diag_t *d = canfdi_pi_diag(&pi);
+  pi.diag.steps = UINT32_MAX - 1U;
+  pi.diag.sat_hi = UINT32_MAX;
+  pi.diag.int_holds = UINT32_MAX - 1U;
+  pi.diag.tracks = UINT32_MAX;
+  pi.diag.resets = UINT32_MAX;
+  for (int k = 0; k < 3; k++) {
+    /* e = 10: P alone saturates the output at +4, the increment is held */
+    ck_assert_int_eq(canfdi_pi_step_q16(&pi, 10 * ONE, 0, 0, CANFDI_PI_HOLD_NONE),
+                     canfdi_pi_step_q16(&ref, 10 * ONE, 0, 0, CANFDI_PI_HOLD_NONE));
+  }
+  ck_assert_uint_eq(d->steps, UINT32_MAX);
+  ck_assert_uint_eq(d->sat_hi, UINT32_MAX);
+  ck_assert_uint_eq(d->int_holds, UINT32_MAX);
+  ck_assert_uint_eq(canfdi_pi_diag(&ref)->sat_hi, 3U);
+  canfdi_pi_track_q16(&pi, ONE);
+  canfdi_pi_reset_q16(&pi, 0, 0);
+  ck_assert_uint_eq(d->tracks, UINT32_MAX);
+  ck_assert_uint_eq(d->resets, UINT32_MAX);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("pi");
@@ -486,6 +515,10 @@ static Suite *make_suite(void)
   tc = tcase_create("random");
   tcase_add_test(tc, test_random_vs_double);
   tcase_add_test(tc, test_random_extremes);
+  suite_add_tcase(s, tc);
+
+  tc = tcase_create("counters");
+  tcase_add_test(tc, test_counters_saturate);
   suite_add_tcase(s, tc);
   return s;
 }

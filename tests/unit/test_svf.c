@@ -405,6 +405,24 @@ START_TEST(test_step_monotone)
 }
 END_TEST
 
+/* The diagnostics counters saturate at UINT32_MAX instead of wrapping. */
+START_TEST(test_counters_saturate)
+{
+  canfdi_svf_t f;
+  init_or_fail(&f, 3U, 2000);
+  f.diag.steps = UINT32_MAX - 1U;
+  f.diag.resets = UINT32_MAX;
+  f.diag.out_saturations = UINT32_MAX - 1U;
+  canfdi_svf_reset(&f, to_q16(-30000.0));
+  canfdi_svf_step(&f, to_q16(30000.0));
+  ck_assert_int_eq(canfdi_svf_d2y_q16(&f), INT32_MAX); /* clipped: counted */
+  canfdi_svf_step(&f, to_q16(30000.0));
+  ck_assert_uint_eq(canfdi_svf_diag(&f)->steps, UINT32_MAX);
+  ck_assert_uint_eq(canfdi_svf_diag(&f)->resets, UINT32_MAX);
+  ck_assert_uint_eq(canfdi_svf_diag(&f)->out_saturations, UINT32_MAX);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("svf");
@@ -426,6 +444,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_trapezoid_identity, 0, (int)N_FCFG);
   tcase_add_loop_test(tc, test_reset_steady, 0, (int)N_FCFG);
   tcase_add_test(tc, test_saturation);
+  tcase_add_test(tc, test_counters_saturate);
   suite_add_tcase(s, tc);
   return s;
 }
