@@ -120,16 +120,15 @@ static void stage_control(canfdi_app_t *app, int32_t *u_dcm, int32_t *u_thr)
 
 /* One plant's gate for this step: the parity equations run on VALID inputs
  * (restarting after a gap), the estimator learns only when fed (restarting
- * with a covariance reset, the estimate kept). */
-static void gate(canfdi_app_gate_t *g, bool in_ok, bool est_on, bool running, bool *reset_parity,
-                 bool *reset_est)
+ * with a covariance reset, the estimate kept, once it has run). */
+static void gate(canfdi_app_gate_t *g, bool in_ok, bool est_on, bool running, bool est_has_run,
+                 bool *reset_parity, bool *reset_est)
 {
   *reset_parity = in_ok && !g->in_ok && running;
-  *reset_est = est_on && !g->est_on && g->est_fed;
+  *reset_est = est_on && !g->est_on && est_has_run;
   g->in_ok = in_ok;
   g->started = g->started || in_ok;
   g->est_on = est_on;
-  g->est_fed = g->est_fed || est_on;
 }
 
 /* Stage 4a: which models run and learn this step (canfdi_app.h, feedback). */
@@ -142,14 +141,15 @@ static void stage_gates(canfdi_app_t *app)
   const bool thr_est = thr_ok && app->fb.mgr.thr.enable && app->vote_out.valid && !app->fb.thr_no_current;
   bool rp;
   bool re;
-  gate(&app->dcm, dcm_ok, dcm_ok && !app->fb.dcm_ua_bad, app->running, &rp, &re);
+  gate(&app->dcm, dcm_ok, dcm_ok && !app->fb.dcm_ua_bad, app->running,
+       canfdi_est_dcm_has_run(&app->est_dcm), &rp, &re);
   if (rp) {
     canfdi_parity_dcm_reset(&app->parity_dcm);
   }
   if (re) {
     canfdi_est_dcm_reset(&app->est_dcm, true);
   }
-  gate(&app->thr, thr_ok, thr_est, app->running, &rp, &re);
+  gate(&app->thr, thr_ok, thr_est, app->running, canfdi_est_thr_has_run(&app->est_thr), &rp, &re);
   if (rp) {
     canfdi_parity_thr_reset(&app->parity_thr);
   }

@@ -153,8 +153,6 @@ typedef struct {
   bool in_ok;     /* the plant's inputs VALID this step: parity equations run */
   bool started;   /* in_ok was true once since power-up: the drive may be energised */
   bool est_on;    /* the estimator was fed this step */
-  bool est_fed;   /* the estimator was fed at least once since power-up */
-  bool stepped;   /* the parity equations ran at least once since power-up */
 } canfdi_app_gate_t;
 
 typedef struct {

@@ -77,11 +77,11 @@ static void cal_position_sensors(canfdi_app_cal_t *cal)
   cal->tps_range.deb.jump_down_value = 0;
   cal->tps_range.deb.jump_up = true;
   cal->tps_range.deb.jump_down = true;
-  /* Vote: the potentiometers' design line 0.5 V + 4 V / (pi/2 rad). */
-  cal->vote.tps1_zero_V_q16 = CANFDI_Q16_MILLI(500);
-  cal->vote.tps1_rad_per_V_q16 = CANFDI_Q16_DEG(90, 4);
-  cal->vote.tps2_zero_V_q16 = CANFDI_Q16_MILLI(4500);
-  cal->vote.tps2_rad_per_V_q16 = -CANFDI_Q16_DEG(90, 4);
+  /* The potentiometers' design lines: TPS1 0.5 V + 4 V per 90 deg, TPS2
+   * 4.5 V - 4 V per 90 deg (model/canfdi_tps.h). */
+  canfdi_tps_cal_default(&cal->tps1, &cal->tps2);
+  cal->vote.tps1 = cal->tps1;
+  cal->vote.tps2 = cal->tps2;
   cal->vote.tol_tps_rad_q16 = CANFDI_Q16_MILLI(20);
   cal->vote.tol_model_rad_q16 = CANFDI_Q16_MILLI(50);
   cal->vote.isolate_steps_tps = 20U;

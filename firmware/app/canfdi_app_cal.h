@@ -30,8 +30,13 @@
 #include "model/canfdi_est_thr.h"
 #include "model/canfdi_parity_dcm.h"
 #include "model/canfdi_parity_thr.h"
+#include "model/canfdi_tps.h"
 
 typedef struct {
+  canfdi_tps_cal_t tps1;           /* throttle-position sensor characteristics: */
+  canfdi_tps_cal_t tps2;           /* the one source for the vote and the parity
+                                    * equations (canfdi_app_init copies them into
+                                    * vote and parity_thr) */
   canfdi_rx_cfg_t rx;
   canfdi_ctrl_dcm_cal_t ctrl_dcm;
   canfdi_ctrl_thr_cal_t ctrl_thr;

@@ -41,6 +41,11 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
   if ((app != NULL) && (cal != NULL)) {
     app->initialised = false;
     app->cal = *cal;
+    /* one characteristic per sensor, whatever the module fields hold */
+    app->cal.vote.tps1 = cal->tps1;
+    app->cal.vote.tps2 = cal->tps2;
+    app->cal.parity_thr.tps1 = cal->tps1;
+    app->cal.parity_thr.tps2 = cal->tps2;
     rc = init_modules(app, now_us);
     if (rc == CANFDI_OK) {
       uint32_t i;

@@ -46,15 +46,11 @@ static void consecutive_cfg(canfdi_debounce_cfg_t *c, uint16_t n)
 
 static bool cfg_ok(const canfdi_vote_cfg_t *c)
 {
-  return (c->tps1_rad_per_V_q16 > 0) && (c->tps2_rad_per_V_q16 < 0) &&
+  return (canfdi_tps_cal_check(&c->tps1) == CANFDI_OK) && (canfdi_tps_cal_check(&c->tps2) == CANFDI_OK) &&
+         (c->tps1.slope_V_rad_q16 > 0) && (c->tps2.slope_V_rad_q16 < 0) &&
          (c->tol_tps_rad_q16 > 0) && (c->tol_model_rad_q16 > 0) &&
          (c->isolate_steps_tps >= 1U) && (c->isolate_steps_tps <= 32767U) &&
          (c->isolate_steps_model >= 1U) && (c->isolate_steps_model <= 32767U);
-}
-
-int32_t canfdi_vote_tps_to_rad_q16(int32_t v_V_q16, int32_t zero_V_q16, int32_t rad_per_V_q16)
-{
-  return canfdi_mul_s32_qn(canfdi_sub_s32_sat(v_V_q16, zero_V_q16), rad_per_V_q16, 16U);
 }
 
 int32_t canfdi_vote_init(canfdi_vote_t *v, const canfdi_vote_cfg_t *cfg)
@@ -65,6 +61,8 @@ int32_t canfdi_vote_init(canfdi_vote_t *v, const canfdi_vote_cfg_t *cfg)
     if ((cfg != NULL) && cfg_ok(cfg)) {
       uint32_t s;
       v->cfg = *cfg;
+      (void)canfdi_tps_init(&v->tps[0], &cfg->tps1); /* valid: cfg_ok */
+      (void)canfdi_tps_init(&v->tps[1], &cfg->tps2);
       consecutive_cfg(&v->deb_cfg_tps, cfg->isolate_steps_tps);
       consecutive_cfg(&v->deb_cfg_model, cfg->isolate_steps_model);
       rc = CANFDI_OK;
@@ -197,10 +195,8 @@ int32_t canfdi_vote_step(canfdi_vote_t *v, const canfdi_vote_in_t *in, canfdi_vo
     bool report = false;
     canfdi_vote_status_t st;
 
-    out->theta_rad_q16[0] =
-        canfdi_vote_tps_to_rad_q16(in->tps1_V_q16, c->tps1_zero_V_q16, c->tps1_rad_per_V_q16);
-    out->theta_rad_q16[1] =
-        canfdi_vote_tps_to_rad_q16(in->tps2_V_q16, c->tps2_zero_V_q16, c->tps2_rad_per_V_q16);
+    out->theta_rad_q16[0] = canfdi_tps_V_to_rad_q16(&v->tps[0], in->tps1_V_q16);
+    out->theta_rad_q16[1] = canfdi_tps_V_to_rad_q16(&v->tps[1], in->tps2_V_q16);
     out->theta_rad_q16[2] = in->model_rad_q16;
     valid_in = (uint8_t)((in->tps1_valid ? CANFDI_VOTE_BIT_TPS1 : 0U) |
                          (in->tps2_valid ? CANFDI_VOTE_BIT_TPS2 : 0U) |

@@ -67,9 +67,10 @@
  * re-admitted. Separate step counts for the sensors and the model, because
  * the model may lag in fast strokes.
  *
- * Scaling and overflow: voltage differences sat(V - zero) in Q16.16 (exact
- * for any ADC value), times gain Q16.16 -> Q32.32 in int64, rounded half
- * up to Q16.16 and saturated (canfdi_mul_s32_qn). Differences of angles and
+ * Scaling and overflow: voltages to angles by the sensors' characteristics
+ * (canfdi_tps_V_to_rad_q16: saturating difference, Q8.24 gain, 64-bit
+ * product rounded half up to Q16.16 and saturated), the same conversion the
+ * throttle parity equations use. Differences of angles and
  * sums for the means are formed in int64 (exact), the means rounded half
  * up (canfdi_asr64_rnd by 1), so nothing overflows or wraps; a saturated
  * conversion (an absurd calibration) only makes that source disagree.
@@ -92,6 +93,7 @@
 
 #include "core/canfdi_common.h"
 #include "core/canfdi_debounce.h"
+#include "model/canfdi_tps.h"
 
 #define CANFDI_VOTE_SRC_TPS1 0U
 #define CANFDI_VOTE_SRC_TPS2 1U
@@ -113,10 +115,8 @@ typedef enum {
 
 /* Calibration (copied at init). Domain checked by canfdi_vote_init. */
 typedef struct {
-  int32_t tps1_zero_V_q16;      /* TPS1 voltage at 0 rad */
-  int32_t tps1_rad_per_V_q16;   /* > 0 */
-  int32_t tps2_zero_V_q16;      /* TPS2 voltage at 0 rad */
-  int32_t tps2_rad_per_V_q16;   /* < 0 */
+  canfdi_tps_cal_t tps1;        /* TPS1 characteristic, rising (model/canfdi_tps.h) */
+  canfdi_tps_cal_t tps2;        /* TPS2 characteristic, falling */
   int32_t tol_tps_rad_q16;      /* > 0, sensor-sensor agreement */
   int32_t tol_model_rad_q16;    /* > 0, sensor-model agreement */
   uint16_t isolate_steps_tps;   /* 1..32767 consecutive outlier steps */
@@ -158,6 +158,7 @@ typedef struct {
 
 typedef struct {
   canfdi_vote_cfg_t cfg;
+  canfdi_tps_t tps[2];            /* the characteristics, prepared for conversion */
   canfdi_debounce_cfg_t deb_cfg_tps;
   canfdi_debounce_cfg_t deb_cfg_model;
   canfdi_debounce_t deb[CANFDI_VOTE_N_SRC];
@@ -168,8 +169,8 @@ typedef struct {
 } canfdi_vote_t;
 
 /*
- * Validate cfg (gains of the documented signs and non-zero, tolerances > 0,
- * step counts 1..32767) and reset v: nothing isolated, held angle 0,
+ * Validate cfg (TPS1 rising, TPS2 falling, each a valid canfdi_tps
+ * characteristic; tolerances > 0, step counts 1..32767) and reset v: nothing isolated, held angle 0,
  * diagnostics 0. Returns CANFDI_OK or -CANFDI_EINVAL (then v is unusable
  * and step() rejects it). Cost: O(1).
  */
@@ -188,12 +189,6 @@ int32_t canfdi_vote_step(canfdi_vote_t *v, const canfdi_vote_in_t *in, canfdi_vo
  * unusable instance. Cost: O(1). */
 void canfdi_vote_clear(canfdi_vote_t *v);
 
-/*
- * Potentiometer voltage to angle: sat(round((v - zero) * gain)), all
- * Q16.16 (V, V, rad/V -> rad). Scaling and overflow as in the header
- * comment. Pure; cannot fail by contract. Cost: one 64-bit multiply.
- */
-int32_t canfdi_vote_tps_to_rad_q16(int32_t v_V_q16, int32_t zero_V_q16, int32_t rad_per_V_q16);
 
 /* Diagnostics snapshot (zero for NULL). Cost: O(1). */
 canfdi_vote_diag_t canfdi_vote_diag(const canfdi_vote_t *v);

@@ -427,10 +427,10 @@ static void guard_ft(void)
   canfdi_actmgr_out_t mout;
   canfdi_degrade_transition_t tr;
 
-  vc.tps1_zero_V_q16 = in_s32[0];
-  vc.tps1_rad_per_V_q16 = in_s32[1];
-  vc.tps2_zero_V_q16 = in_s32[2];
-  vc.tps2_rad_per_V_q16 = -in_s32[1];
+  vc.tps1.zero_V_q16 = in_s32[0];
+  vc.tps1.slope_V_rad_q16 = in_s32[1];
+  vc.tps2.zero_V_q16 = in_s32[2];
+  vc.tps2.slope_V_rad_q16 = -in_s32[1];
   vc.tol_tps_rad_q16 = in_s32[0];
   vc.tol_model_rad_q16 = in_s32[2];
   vc.isolate_steps_tps = (uint16_t)in_u32;
@@ -443,7 +443,6 @@ static void guard_ft(void)
   vin.model_valid = (in_u32 & 4U) != 0U;
   sink32(canfdi_vote_init(&vote, &vc));
   sink32(canfdi_vote_step(&vote, &vin, &vout));
-  sink32(canfdi_vote_tps_to_rad_q16(in_s32[0], in_s32[1], in_s32[2]));
   canfdi_vote_clear(&vote);
   sink32((int32_t)canfdi_vote_diag(&vote).steps);
 

@@ -902,7 +902,6 @@ static void rig_init(rig_t *r)
   canfdi_sim_refctl_cfg_t rc;
   canfdi_actmgr_cfg_t mc;
   canfdi_vote_cfg_t vc;
-  const double g = (3.14159265358979323846 / 2.0) / 4.0;
   canfdi_sim_default_cfg(&sc);
   sc.sigma[CANFDI_SIM_S_DCM_UA] = 0.05;
   sc.sigma[CANFDI_SIM_S_DCM_IA] = 0.02;
@@ -915,10 +914,7 @@ static void rig_init(rig_t *r)
   canfdi_sim_refctl_init(&r->ctl, &rc);
   canfdi_actmgr_default_cfg(&mc);
   ck_assert_int_eq(canfdi_actmgr_init(&r->mgr, &mc), CANFDI_OK);
-  vc.tps1_zero_V_q16 = Q16(0.5);
-  vc.tps1_rad_per_V_q16 = Q16(g);
-  vc.tps2_zero_V_q16 = Q16(4.5);
-  vc.tps2_rad_per_V_q16 = -Q16(g);
+  canfdi_tps_cal_default(&vc.tps1, &vc.tps2);
   vc.tol_tps_rad_q16 = Q16(0.02);
   vc.tol_model_rad_q16 = Q16(0.05);
   vc.isolate_steps_tps = 20U;

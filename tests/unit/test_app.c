@@ -21,7 +21,7 @@ START_TEST(test_init_args)
   ck_assert_int_eq(canfdi_app_init(NULL, &cal, 0U), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_app_init(&app, NULL, 0U), -CANFDI_EINVAL);
   /* a module must refuse its part of the calibration, and the app with it */
-  cal.vote.tps1_rad_per_V_q16 = -cal.vote.tps1_rad_per_V_q16;
+  cal.tps1.slope_V_rad_q16 = -cal.tps1.slope_V_rad_q16;
   ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_app_step(&app, 1000U, out), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_app_rx_frame(&app, 0x10U, NULL, 0U, 0U), -CANFDI_EINVAL);

@@ -34,10 +34,10 @@ static const double TOL_MODEL = 0.05; /* rad (~2.9 deg) */
 static canfdi_vote_cfg_t design_cfg(uint16_t n_tps, uint16_t n_model)
 {
   canfdi_vote_cfg_t c;
-  c.tps1_zero_V_q16 = Q16(0.5);
-  c.tps1_rad_per_V_q16 = Q16(gain_rad_per_V());
-  c.tps2_zero_V_q16 = Q16(4.5);
-  c.tps2_rad_per_V_q16 = -Q16(gain_rad_per_V());
+  c.tps1.zero_V_q16 = Q16(0.5);
+  c.tps1.slope_V_rad_q16 = Q16(1.0 / gain_rad_per_V());
+  c.tps2.zero_V_q16 = Q16(4.5);
+  c.tps2.slope_V_rad_q16 = -Q16(1.0 / gain_rad_per_V());
   c.tol_tps_rad_q16 = Q16(TOL_TPS);
   c.tol_model_rad_q16 = Q16(TOL_MODEL);
   c.isolate_steps_tps = n_tps;
@@ -74,10 +74,10 @@ START_TEST(test_cfg_domain)
   canfdi_vote_t v;
   switch (_i) {
   case 0: break; /* valid */
-  case 1: c.tps1_rad_per_V_q16 = 0; break;
-  case 2: c.tps1_rad_per_V_q16 = -1; break;
-  case 3: c.tps2_rad_per_V_q16 = 0; break;
-  case 4: c.tps2_rad_per_V_q16 = 1; break;
+  case 1: c.tps1.slope_V_rad_q16 = 0; break;
+  case 2: c.tps1.slope_V_rad_q16 = -c.tps1.slope_V_rad_q16; break; /* TPS1 must rise */
+  case 3: c.tps2.slope_V_rad_q16 = 0; break;
+  case 4: c.tps2.slope_V_rad_q16 = -c.tps2.slope_V_rad_q16; break; /* TPS2 must fall */
   case 5: c.tol_tps_rad_q16 = 0; break;
   case 6: c.tol_model_rad_q16 = -5; break;
   case 7: c.isolate_steps_tps = 0U; break;
@@ -127,17 +127,36 @@ START_TEST(test_conversion)
   const double v1 = 0.5 + th / gain_rad_per_V();
   const double v2 = 4.5 - th / gain_rad_per_V();
   const canfdi_vote_cfg_t c = design_cfg(1U, 1U);
-  assert_angle(canfdi_vote_tps_to_rad_q16(Q16(v1), c.tps1_zero_V_q16, c.tps1_rad_per_V_q16), th);
-  assert_angle(canfdi_vote_tps_to_rad_q16(Q16(v2), c.tps2_zero_V_q16, c.tps2_rad_per_V_q16), th);
+  canfdi_vote_t v;
+  canfdi_vote_out_t out;
+  canfdi_vote_in_t in = make_in(th, th, th, true, true, true);
+  in.tps1_V_q16 = Q16(v1);
+  in.tps2_V_q16 = Q16(v2);
+  ck_assert_int_eq(canfdi_vote_init(&v, &c), CANFDI_OK);
+  ck_assert_int_eq(canfdi_vote_step(&v, &in, &out), CANFDI_OK);
+  assert_angle(out.theta_rad_q16[CANFDI_VOTE_SRC_TPS1], th);
+  assert_angle(out.theta_rad_q16[CANFDI_VOTE_SRC_TPS2], th);
 }
 END_TEST
 
 START_TEST(test_conversion_saturates)
 {
-  /* an absurd calibration saturates instead of wrapping */
-  ck_assert_int_eq(canfdi_vote_tps_to_rad_q16(INT32_MAX, INT32_MIN, 65536 * 100), INT32_MAX);
-  ck_assert_int_eq(canfdi_vote_tps_to_rad_q16(INT32_MIN, INT32_MAX, 65536 * 100), INT32_MIN);
-  ck_assert_int_eq(canfdi_vote_tps_to_rad_q16(INT32_MIN, INT32_MAX, -65536 * 100), INT32_MAX);
+  /* voltages far outside the sensors' range saturate instead of wrapping */
+  const canfdi_vote_cfg_t c = design_cfg(1U, 1U);
+  canfdi_vote_t v;
+  canfdi_vote_out_t out;
+  canfdi_vote_in_t in = make_in(0.0, 0.0, 0.0, false, false, false);
+  in.tps1_V_q16 = INT32_MAX;
+  in.tps2_V_q16 = INT32_MAX;
+  ck_assert_int_eq(canfdi_vote_init(&v, &c), CANFDI_OK);
+  ck_assert_int_eq(canfdi_vote_step(&v, &in, &out), CANFDI_OK);
+  ck_assert_int_gt(out.theta_rad_q16[CANFDI_VOTE_SRC_TPS1], 0);
+  ck_assert_int_lt(out.theta_rad_q16[CANFDI_VOTE_SRC_TPS2], 0);
+  in.tps1_V_q16 = INT32_MIN;
+  in.tps2_V_q16 = INT32_MIN;
+  ck_assert_int_eq(canfdi_vote_step(&v, &in, &out), CANFDI_OK);
+  ck_assert_int_lt(out.theta_rad_q16[CANFDI_VOTE_SRC_TPS1], 0);
+  ck_assert_int_gt(out.theta_rad_q16[CANFDI_VOTE_SRC_TPS2], 0);
 }
 END_TEST
 
