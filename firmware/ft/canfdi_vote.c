@@ -53,6 +53,23 @@ static bool cfg_ok(const canfdi_vote_cfg_t *c)
          (c->isolate_steps_model >= 1U) && (c->isolate_steps_model <= 32767U);
 }
 
+/* The sensor's zero and its gain 1 / slope in Q16.16, signed like the
+ * slope, rounded half up from canfdi_tps's Q8.24 reciprocal (cal valid). */
+static void set_gain(canfdi_vote_t *v, uint32_t k, const canfdi_tps_cal_t *cal)
+{
+  canfdi_tps_t t;
+  int32_t g;
+  (void)canfdi_tps_init(&t, cal);
+  g = canfdi_asr32_rnd(t.rad_per_V_q24, 8U);
+  v->zero_V_q16[k] = cal->zero_V_q16;
+  v->rad_per_V_q16[k] = (cal->slope_V_rad_q16 < 0) ? -g : g;
+}
+
+static int32_t tps_to_rad(const canfdi_vote_t *v, uint32_t k, int32_t v_V_q16)
+{
+  return canfdi_mul_s32_qn(canfdi_sub_s32_sat(v_V_q16, v->zero_V_q16[k]), v->rad_per_V_q16[k], 16U);
+}
+
 int32_t canfdi_vote_init(canfdi_vote_t *v, const canfdi_vote_cfg_t *cfg)
 {
   int32_t rc = -CANFDI_EINVAL;
@@ -61,8 +78,8 @@ int32_t canfdi_vote_init(canfdi_vote_t *v, const canfdi_vote_cfg_t *cfg)
     if ((cfg != NULL) && cfg_ok(cfg)) {
       uint32_t s;
       v->cfg = *cfg;
-      (void)canfdi_tps_init(&v->tps[0], &cfg->tps1); /* valid: cfg_ok */
-      (void)canfdi_tps_init(&v->tps[1], &cfg->tps2);
+      set_gain(v, 0U, &cfg->tps1);
+      set_gain(v, 1U, &cfg->tps2);
       consecutive_cfg(&v->deb_cfg_tps, cfg->isolate_steps_tps);
       consecutive_cfg(&v->deb_cfg_model, cfg->isolate_steps_model);
       rc = CANFDI_OK;
@@ -195,8 +212,8 @@ int32_t canfdi_vote_step(canfdi_vote_t *v, const canfdi_vote_in_t *in, canfdi_vo
     bool report = false;
     canfdi_vote_status_t st;
 
-    out->theta_rad_q16[0] = canfdi_tps_V_to_rad_q16(&v->tps[0], in->tps1_V_q16);
-    out->theta_rad_q16[1] = canfdi_tps_V_to_rad_q16(&v->tps[1], in->tps2_V_q16);
+    out->theta_rad_q16[0] = tps_to_rad(v, 0U, in->tps1_V_q16);
+    out->theta_rad_q16[1] = tps_to_rad(v, 1U, in->tps2_V_q16);
     out->theta_rad_q16[2] = in->model_rad_q16;
     valid_in = (uint8_t)((in->tps1_valid ? CANFDI_VOTE_BIT_TPS1 : 0U) |
                          (in->tps2_valid ? CANFDI_VOTE_BIT_TPS2 : 0U) |

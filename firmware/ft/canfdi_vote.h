@@ -68,9 +68,11 @@
  * the model may lag in fast strokes.
  *
  * Scaling and overflow: voltages to angles by the sensors' characteristics
- * (canfdi_tps_V_to_rad_q16: saturating difference, Q8.24 gain, 64-bit
- * product rounded half up to Q16.16 and saturated), the same conversion the
- * throttle parity equations use. Differences of angles and
+ * (cfg.tps1/tps2, model/canfdi_tps.h): sat(V - zero) in Q16.16 times the
+ * gain 1 / slope, which init rounds half up from canfdi_tps's Q8.24 value
+ * to Q16.16 (for the default line (pi/2)/4 rad/V = 25736); the 64-bit
+ * product is rounded half up to Q16.16 and saturated (canfdi_mul_s32_qn).
+ * The angle is within 1 LSB (1.5e-5 rad) of canfdi_tps_V_to_rad_q16's. Differences of angles and
  * sums for the means are formed in int64 (exact), the means rounded half
  * up (canfdi_asr64_rnd by 1), so nothing overflows or wraps; a saturated
  * conversion (an absurd calibration) only makes that source disagree.
@@ -158,7 +160,8 @@ typedef struct {
 
 typedef struct {
   canfdi_vote_cfg_t cfg;
-  canfdi_tps_t tps[2];            /* the characteristics, prepared for conversion */
+  int32_t zero_V_q16[2];          /* TPS1/TPS2 voltage at 0 rad, from cfg */
+  int32_t rad_per_V_q16[2];       /* 1 / slope, Q16.16, from cfg at init */
   canfdi_debounce_cfg_t deb_cfg_tps;
   canfdi_debounce_cfg_t deb_cfg_model;
   canfdi_debounce_t deb[CANFDI_VOTE_N_SRC];
