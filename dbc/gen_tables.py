@@ -533,7 +533,7 @@ def update_dbc(text: str, faults: list[dict], dtcs: list[dict]) -> str:
     return "\n".join(lines)
 
 
-RULE_COLUMNS = ["fault", "kind", "polarity", "pattern", "required", "forbidden", "untested", "note"]
+RULE_COLUMNS = ["fault", "kind", "polarity", "pattern", "refs", "required", "forbidden", "untested", "note"]
 # Symptom flags a hard rule may name (CANFDI_SYM_F_<NAME> of
 # firmware/diag/canfdi_symptoms.h; the C compiler checks the names).
 RULE_FLAGS = ["TPS1_LOW", "TPS1_HIGH", "TPS2_LOW", "TPS2_HIGH", "TPS1_OUTLIER", "TPS2_OUTLIER",
@@ -573,11 +573,18 @@ def load_rules(root: Path, faults: list[dict]) -> list[dict]:
                               f"({RULE_CHANNELS.get(f['component'])})")
             if "P" not in chars and "N" not in chars and "Z" not in chars:
                 errors.append(f"{where}: pattern {r['pattern']!r} has no necessary entry")
+            refs = r["refs"].replace(" ", "") if r["refs"] else "." * len(chars)
+            if len(refs) != len(chars) or set(refs) - set(".ab"):
+                errors.append(f"{where}: refs {r['refs']!r} needs one of . a b per channel")
+            elif any(ref != "." and c not in "+-PN" for ref, c in zip(refs, chars)):
+                errors.append(f"{where}: refs {r['refs']!r} refers a channel whose entry has no sign")
+            r["refs_c"] = r["refs"] if r["refs"] else r["pattern"].replace("+", ".").replace("-", ".") \
+                .replace("P", ".").replace("N", ".").replace("Z", ".").replace("0", ".")
             if r["required"] or r["forbidden"] or r["untested"]:
                 errors.append(f"{where}: a model rule names no flags")
         elif r["kind"] == "hard":
-            if r["pattern"] or r["polarity"]:
-                errors.append(f"{where}: a hard rule has no pattern or polarity")
+            if r["pattern"] or r["polarity"] or r["refs"]:
+                errors.append(f"{where}: a hard rule has no pattern, polarity or refs")
             for col in ("required", "forbidden", "untested"):
                 names = r[col].split("|") if r[col] else []
                 bad = [n for n in names if n not in RULE_FLAGS]
@@ -604,7 +611,7 @@ def gen_rules_h(rules: list[dict]) -> str:
            "/*",
            " * canfdi_diag_rules.h - the rule tables of fault-symptom reasoning",
            " * (diag/canfdi_diagnosis.h explains the patterns and the flags).",
-           " * Memory: 16 bytes per model rule, 16 per hard rule, in ROM.",
+           " * Memory: 29 bytes per model rule, 12 per hard rule, in ROM.",
            " */",
            "#ifndef CANFDI_DIAG_RULES_H",
            "#define CANFDI_DIAG_RULES_H",
@@ -621,12 +628,16 @@ def gen_rules_h(rules: list[dict]) -> str:
            "#define CANFDI_DIAG_PATTERN_LEN 13U",
            "",
            "/* Pattern: one character per channel, spaces ignored: '+' '-' '0'",
-           " * supporting, 'P' 'N' 'Z' necessary, '.' don't care. */",
+           " * supporting, 'P' 'N' 'Z' necessary, '.' don't care. Refs, laid out",
+           " * like the pattern: the sign an entry expects is multiplied by the",
+           " * component's operating-point sign 'a' or 'b' (canfdi_symptoms_t",
+           " * dcm_ref / thr_ref), '.' none. */",
            "typedef struct {",
            "  uint8_t fault;",
            "  uint8_t comp;    /* CANFDI_DIAG_COMP_* */",
            "  uint8_t bipolar; /* the pattern or its negation */",
            "  char pattern[CANFDI_DIAG_PATTERN_LEN];",
+           "  char refs[CANFDI_DIAG_PATTERN_LEN];",
            "} canfdi_diag_model_rule_t;",
            "",
            "/* Flags (CANFDI_SYM_F_*): all of `req` persistently, none of `forbid`;",
@@ -655,8 +666,8 @@ def gen_rules_c(rules: list[dict]) -> str:
     for r in rules:
         if r["kind"] == "model":
             bi = "1U" if r["polarity"] == "b" else "0U"
-            out.append(f"  {{{r['const']}, {RULE_COMP_C[r['component']]}, {bi}, \"{r['pattern']}\"}}, "
-                       f"/* {r['note']} */")
+            out.append(f"  {{{r['const']}, {RULE_COMP_C[r['component']]}, {bi}, \"{r['pattern']}\", "
+                       f"\"{r['refs_c']}\"}}, /* {r['note']} */")
     out += ["};", "",
             "const canfdi_diag_hard_rule_t canfdi_diag_hard_rules[CANFDI_DIAG_N_HARD_RULES] = {"]
     for r in rules:

@@ -221,7 +221,12 @@ static void stage_diagnose(canfdi_app_t *app)
   si.est_thr = &app->est_thr;
   si.dcm_est_on = app->dcm.est_on;
   si.thr_est_on = app->thr.est_on;
-  si.load_offset_Nm_q16 = canfdi_sub_s32_sat(load_known_q16(app), app->cal.load_nom_Nm_q16);
+  si.load_known_Nm_q16 = load_known_q16(app);
+  si.load_nom_Nm_q16 = app->cal.load_nom_Nm_q16;
+  si.dcm_w_rad_s_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_OMEGA);
+  si.dcm_i_A_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_IA);
+  si.thr_u_V_q16 = app->fb.mgr.thr.u_cmd_V_q16;
+  si.thr_i_A_q16 = IN_VAL(app, CANFDI_RX_IN_THR_IMOT);
   si.tps_range[0] = (uint8_t)canfdi_limit_symptom(&app->tps_range[0]);
   si.tps_range[1] = (uint8_t)canfdi_limit_symptom(&app->tps_range[1]);
   si.tps_invalid[0] = !IN_USABLE(app, CANFDI_RX_IN_THR_TPS1);
@@ -229,7 +234,7 @@ static void stage_diagnose(canfdi_app_t *app)
   si.vote_isolated_mask = app->vote_out.isolated_mask;
   si.mgr_detected = app->fb.mgr.detected;
   si.actmon = &app->actmon_out;
-  canfdi_app_sym_build(&si, &app->sym);
+  canfdi_app_sym_build(&app->sym_state, &si, &app->sym);
   canfdi_diagnosis_step(&app->diagnosis, &app->sym, app->report);
   ff.time_ms = canfdi_uptime_ms(&app->uptime);
   ff.omega_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_OMEGA);

@@ -170,6 +170,7 @@ typedef struct {
   canfdi_limit_t tps_range[2];
   canfdi_vote_t vote;
   canfdi_actmon_t actmon;
+  canfdi_app_sym_t sym_state;
   canfdi_actmgr_t actmgr;
   canfdi_diagnosis_t diagnosis;
   canfdi_dtc_t dtc;

@@ -104,6 +104,7 @@ void canfdi_app_default_cal(canfdi_app_cal_t *cal)
     cal_models(cal);
     cal_position_sensors(cal);
     canfdi_actmon_default_cfg(&cal->actmon);
+    canfdi_app_sym_default_cfg(&cal->sym);
     canfdi_actmgr_default_cfg(&cal->actmgr);
     canfdi_diagnosis_default_cfg(&cal->diagnosis);
     canfdi_dtcroute_default_cfg(&cal->dtcroute);

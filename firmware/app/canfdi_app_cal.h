@@ -15,6 +15,7 @@
 #ifndef CANFDI_APP_CAL_H
 #define CANFDI_APP_CAL_H
 
+#include "app/canfdi_app_sym.h"
 #include "comm/canfdi_rx.h"
 #include "core/canfdi_common.h"
 #include "ctrl/canfdi_ctrl_dcm.h"
@@ -51,6 +52,7 @@ typedef struct {
   canfdi_limit_cfg_t tps_range;    /* TPS voltage window, Q16.16 V */
   canfdi_vote_cfg_t vote;
   canfdi_actmon_cfg_t actmon;
+  canfdi_app_sym_cfg_t sym;
   canfdi_actmgr_cfg_t actmgr;
   canfdi_diagnosis_cfg_t diagnosis;
   canfdi_dtcroute_cfg_t dtcroute;

@@ -25,6 +25,7 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
       (canfdi_limit_init(&app->tps_range[1], &c->tps_range) != CANFDI_OK) ||
       (canfdi_vote_init(&app->vote, &c->vote) != CANFDI_OK) ||
       (canfdi_actmon_init(&app->actmon, &c->actmon) != CANFDI_OK) ||
+      (canfdi_app_sym_init(&app->sym_state, &c->sym) != CANFDI_OK) ||
       (canfdi_actmgr_init(&app->actmgr, &c->actmgr) != CANFDI_OK) ||
       (canfdi_diagnosis_init(&app->diagnosis, &c->diagnosis) != CANFDI_OK) ||
       (canfdi_dtc_init(&app->dtc, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT) != CANFDI_OK) ||

@@ -6,8 +6,75 @@
 
 #include "catalogue/canfdi_catalogue.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_qconst.h"
 #include "detect/canfdi_limit.h"
 #include "ft/canfdi_vote.h"
+
+void canfdi_app_sym_default_cfg(canfdi_app_sym_cfg_t *cfg)
+{
+  if (cfg != NULL) {
+    cfg->dcm_w_on_rad_s_q16 = 10 * CANFDI_Q16_ONE;
+    cfg->dcm_i_on_A_q16 = CANFDI_Q16_MILLI(800);
+    cfg->thr_u_on_V_q16 = CANFDI_Q16_ONE;
+    cfg->thr_i_on_A_q16 = CANFDI_Q16_MILLI(100);
+    cfg->mech_settle_steps = 1000U;
+  }
+}
+
+int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if ((m != NULL) && (cfg != NULL) && (cfg->dcm_w_on_rad_s_q16 > 0) && (cfg->dcm_i_on_A_q16 > 0) &&
+      (cfg->thr_u_on_V_q16 > 0) && (cfg->thr_i_on_A_q16 > 0)) {
+    m->cfg = *cfg;
+    m->dcm_ref[0] = 0;
+    m->dcm_ref[1] = 0;
+    m->thr_ref[0] = 0;
+    m->thr_ref[1] = 0;
+    m->mech_hold = cfg->mech_settle_steps;
+    rc = CANFDI_OK;
+  }
+  return rc;
+}
+
+/* The sign of x with hysteresis: counts from |x| >= on, 0 below on / 2. */
+static int8_t ref_sign(int8_t prev, int32_t x, int32_t on)
+{
+  const int8_t s = (x >= 0) ? (int8_t)1 : (int8_t)-1;
+  const int32_t mag = canfdi_q31_abs(x);
+  int8_t out = 0;
+  if (mag >= on) {
+    out = s;
+  } else if ((mag >= (on / 2)) && (prev == s)) {
+    out = s;
+  } else {
+    /* too small to tell */
+  }
+  return out;
+}
+
+static void references(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+{
+  const canfdi_app_sym_cfg_t *c = &m->cfg;
+  const int8_t w = ref_sign(m->dcm_ref[0], in->dcm_w_rad_s_q16, c->dcm_w_on_rad_s_q16);
+  if (w != m->dcm_ref[0]) {
+    m->mech_hold = c->mech_settle_steps;
+  } else if ((w == 0) && (m->mech_hold < c->mech_settle_steps)) {
+    m->mech_hold = c->mech_settle_steps;
+  } else if (m->mech_hold > 0U) {
+    m->mech_hold--;
+  } else {
+    /* settled */
+  }
+  m->dcm_ref[0] = w;
+  m->dcm_ref[1] = ref_sign(m->dcm_ref[1], in->dcm_i_A_q16, c->dcm_i_on_A_q16);
+  m->thr_ref[0] = ref_sign(m->thr_ref[0], in->thr_u_V_q16, c->thr_u_on_V_q16);
+  m->thr_ref[1] = ref_sign(m->thr_ref[1], in->thr_i_A_q16, c->thr_i_on_A_q16);
+  s->dcm_ref[0] = m->dcm_ref[0];
+  s->dcm_ref[1] = m->dcm_ref[1];
+  s->thr_ref[0] = m->thr_ref[0];
+  s->thr_ref[1] = m->thr_ref[1];
+}
 
 /* (est - nom) / nom in Q16.16, saturating; both in the same Q format. */
 static int32_t pdev_q16(int32_t est, int32_t nom)
@@ -28,21 +95,26 @@ static void residuals(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   s->thr_rn_valid = ((pt != NULL) && in->thr_in_ok) ? pt->valid : 0U;
 }
 
-static void dcm_parameters(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+static void dcm_parameters(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
   const canfdi_est_dcm_t *e = in->est_dcm;
   const canfdi_est_dcm_cfg_t *c = &e->cfg;
-  const int32_t mc_ref = canfdi_add_s32_sat(c->mc_nom_q16, in->load_offset_Nm_q16);
+  const int32_t mf0_nom = canfdi_sub_s32_sat(c->mc_nom_q16, in->load_nom_Nm_q16);
+  int32_t mf0 = canfdi_sub_s32_sat(canfdi_est_dcm_mc_q16(e), in->load_known_Nm_q16);
+  uint8_t mech = canfdi_est_dcm_mech_converged(e) ? 0x0CU : 0U;
+  if (m->dcm_ref[0] < 0) {
+    mf0 = canfdi_q31_neg(mf0);
+  }
+  if ((m->dcm_ref[0] == 0) || (m->mech_hold > 0U)) {
+    mech = 0U;
+  }
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_RA] = pdev_q16(canfdi_est_dcm_ra_q16(e), c->ra_nom_q16);
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI] = pdev_q16(canfdi_est_dcm_psi_q16(e), c->psi_nom_q16);
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J] = pdev_q16(canfdi_est_dcm_j_q24(e), c->j_nom_q24);
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_FRICTION] =
-      (c->mc_nom_q16 != 0)
-          ? canfdi_div_s32_qn(canfdi_sub_s32_sat(canfdi_est_dcm_mc_q16(e), mc_ref), c->mc_nom_q16, 16U)
-          : 0;
+      (c->mc_nom_q16 != 0) ? canfdi_div_s32_qn(canfdi_sub_s32_sat(mf0, mf0_nom), c->mc_nom_q16, 16U) : 0;
   s->dcm_pdev_valid = !in->dcm_est_on ? 0U
-                                      : (uint8_t)((canfdi_est_dcm_arm_converged(e) ? 0x03U : 0U) |
-                                                  (canfdi_est_dcm_mech_converged(e) ? 0x0CU : 0U));
+                                      : (uint8_t)((canfdi_est_dcm_arm_converged(e) ? 0x03U : 0U) | mech);
 }
 
 static void thr_parameters(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
@@ -89,12 +161,13 @@ static uint32_t flags(const canfdi_app_sym_in_t *in)
   return f;
 }
 
-void canfdi_app_sym_build(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+void canfdi_app_sym_build(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
-  CANFDI_ASSERT((in != NULL) && (s != NULL) && (in->est_dcm != NULL) && (in->est_thr != NULL) &&
-                (in->actmon != NULL));
+  CANFDI_ASSERT((m != NULL) && (in != NULL) && (s != NULL) && (in->est_dcm != NULL) &&
+                (in->est_thr != NULL) && (in->actmon != NULL));
+  references(m, in, s);
   residuals(in, s);
-  dcm_parameters(in, s);
+  dcm_parameters(m, in, s);
   thr_parameters(in, s);
   s->flags = flags(in);
   s->dcm_ua_cmd_rn_q16 = in->actmon->dcm_uac_rn_q16;

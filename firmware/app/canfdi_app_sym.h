@@ -14,12 +14,30 @@
  * friction channels are the estimator's fast structured test (nominal
  * mechanical residual correlated with the spring torque and the friction
  * sign over ~0.3 s of motion in both directions, canfdi_est_thr.h).
+ * The friction channel is direction-normalised: with s = sign(w),
+ *   dev = (s (M_c - M_L,known) - M_F0,nom) / mc_nom,   M_F0,nom = mc_nom - load_nom,
+ * i.e. the estimated Coulomb friction against its nominal value (the
+ * lumped M_c = M_F0 sgn(w) + M_L flips its friction share with the
+ * direction), normalised to the lumped nominal so that the thresholds keep
+ * their meaning at the nominal operating point.
  * A channel is valid only while its module ran on valid inputs this step
- * (residuals) or while its estimator is fed and has converged (parameters).
+ * (residuals) or while its estimator is fed and has converged
+ * (parameters); the mechanical estimates (J, M_c and the J/Psi channel)
+ * also not for cfg.mech_settle_steps after the speed's sign changed or
+ * became unknown: the lumped M_c re-converges over the estimator's memory
+ * after a reversal, and near standstill Coulomb friction is whatever holds
+ * the rotor.
+ *
+ * Operating-point references (canfdi_symptoms_t dcm_ref, thr_ref: the signs
+ * a rule's entries may follow, canfdi_diagnosis.h): the sign of the speed
+ * and the armature current, of the throttle's voltage command and motor
+ * current, each with a hysteresis: the sign counts from |x| >= on, is 0
+ * below on / 2, and in between keeps the sign it had (0 stays 0).
  *
  * Scaling and overflow: Q16.16; deviations by canfdi_div_s32_qn
  * (saturating), differences by saturating subtraction. Cost: 8 saturating
- * divisions and ~30 compares per step. Stateless; no heap.
+ * divisions and ~40 compares per step. Memory: 24 bytes of state and
+ * configuration; no heap.
  */
 #ifndef CANFDI_APP_SYM_H
 #define CANFDI_APP_SYM_H
@@ -33,6 +51,21 @@
 #include "model/canfdi_parity_thr.h"
 
 typedef struct {
+  int32_t dcm_w_on_rad_s_q16;   /* > 0: |w| at which the speed's sign counts */
+  int32_t dcm_i_on_A_q16;       /* > 0: |I_A| at which the current's sign counts */
+  int32_t thr_u_on_V_q16;       /* > 0: |u| of the throttle command */
+  int32_t thr_i_on_A_q16;       /* > 0: |i| of the throttle motor */
+  uint16_t mech_settle_steps;   /* mechanical estimates invalid after a speed sign change */
+} canfdi_app_sym_cfg_t;
+
+typedef struct {
+  canfdi_app_sym_cfg_t cfg;
+  int8_t dcm_ref[2];            /* the references of the last step */
+  int8_t thr_ref[2];
+  uint16_t mech_hold;           /* steps the mechanical estimates stay invalid */
+} canfdi_app_sym_t;
+
+typedef struct {
   const canfdi_parity_dcm_t *parity_dcm;
   const canfdi_parity_thr_t *parity_thr;
   bool dcm_in_ok;                  /* the DC-motor parity equations ran on valid inputs */
@@ -41,7 +74,12 @@ typedef struct {
   const canfdi_est_thr_t *est_thr;
   bool dcm_est_on;                 /* the DC-motor estimator was fed this step */
   bool thr_est_on;                 /* the throttle estimator was fed this step */
-  int32_t load_offset_Nm_q16;      /* known load - the calibrated nominal load */
+  int32_t load_known_Nm_q16;       /* the load the models assume this step */
+  int32_t load_nom_Nm_q16;         /* the calibrated nominal load (in mc_nom) */
+  int32_t dcm_w_rad_s_q16;         /* measured speed */
+  int32_t dcm_i_A_q16;             /* measured armature current */
+  int32_t thr_u_V_q16;             /* throttle command over the last interval */
+  int32_t thr_i_A_q16;             /* measured throttle motor current */
   uint8_t tps_range[2];            /* canfdi_limit symptom of TPS1, TPS2 */
   bool tps_invalid[2];             /* TPS1, TPS2 input INVALID this step */
   uint8_t vote_isolated_mask;      /* canfdi_vote_out_t.isolated_mask */
@@ -49,8 +87,19 @@ typedef struct {
   const canfdi_actmon_out_t *actmon;
 } canfdi_app_sym_in_t;
 
+/* Defaults: speed sign from 10 rad/s (r1 of a 10 % flux loss is 0.33 V
+ * there, 3 bands), current from 0.8 A (r1 of a 20 % R_A rise is 0.24 V, 2
+ * bands), throttle voltage from 1 V, current from 0.1 A; mechanical settle
+ * 1000 steps (twice the mechanical estimator's memory). Cannot fail for
+ * non-NULL. */
+void canfdi_app_sym_default_cfg(canfdi_app_sym_cfg_t *cfg);
+
+/* Validates cfg (all > 0) and starts with unknown references. Returns
+ * CANFDI_OK or -CANFDI_EINVAL. */
+int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg);
+
 /* Writes every field of *s. Cannot fail by contract (non-NULL arguments,
  * asserted). */
-void canfdi_app_sym_build(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s);
+void canfdi_app_sym_build(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s);
 
 #endif /* CANFDI_APP_SYM_H */

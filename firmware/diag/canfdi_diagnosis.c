@@ -175,6 +175,21 @@ static void compile_rule(const canfdi_diag_model_rule_t *r, canfdi_diagnosis_rul
     }
   }
   m->care = (uint16_t)(m->pos | m->neg | m->zero);
+  j = 0U;
+  for (k = 0U; (k < CANFDI_DIAG_PATTERN_LEN) && (r->refs[k] != '\0') && (j < CANFDI_DIAG_N_CH); k++) {
+    const char e = r->refs[k];
+    const uint16_t b = (uint16_t)(1U << j);
+    if (e != ' ') {
+      if (e == 'a') {
+        m->ref_a = (uint16_t)(m->ref_a | b);
+      } else if (e == 'b') {
+        m->ref_b = (uint16_t)(m->ref_b | b);
+      } else {
+        /* '.': the entry's sign is absolute */
+      }
+      j++;
+    }
+  }
 }
 
 int32_t canfdi_diagnosis_init(canfdi_diagnosis_t *d, const canfdi_diagnosis_cfg_t *cfg)
@@ -276,6 +291,10 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
   uint32_t i;
   bool v;
   int32_t x;
+  for (i = 0U; i < 2U; i++) {
+    d->ref[CANFDI_DIAG_COMP_DCM][i] = s->dcm_ref[i];
+    d->ref[CANFDI_DIAG_COMP_THR][i] = s->thr_ref[i];
+  }
   for (i = 0U; i < CANFDI_SYM_N_RES; i++) {
     channel(d, CANFDI_DIAG_COMP_DCM, i, s->dcm_rn_q16[i], (s->dcm_rn_valid & (1U << i)) != 0U);
     channel(d, CANFDI_DIAG_COMP_THR, i, s->thr_rn_q16[i], (s->thr_rn_valid & (1U << i)) != 0U);
@@ -356,19 +375,40 @@ static void observe(canfdi_diagnosis_t *d, uint32_t c)
   d->obs_zero = zero;
 }
 
-/*
- * One rule with polarity pol (+1/-1) against the observed masks. Returns
- * true for a candidate (every necessary entry seen and matched, at least
- * one entry evaluated) with its confidence in *pct. Sums: <= 10 entries x
- * 2 x 16.0 in Q16.16 < 2^22; x 100 < 2^29.
- */
-static bool eval_rule(const canfdi_diagnosis_t *d, const canfdi_diagnosis_rule_t *m, int8_t pol, uint32_t *pct)
+/* The rule's entries that follow an operating-point sign: those to flip
+ * (the reference is negative) and those that cannot be judged (it is 0). */
+typedef struct {
+  uint32_t flip;
+  uint32_t unknown;
+} rule_refs_t;
+
+static rule_refs_t refs_of(const canfdi_diagnosis_rule_t *m, const int8_t ref[2])
 {
+  rule_refs_t r;
+  const uint32_t sign_e = (uint32_t)(m->pos | m->neg);
+  r.flip = (((ref[0] < 0) ? (uint32_t)m->ref_a : 0U) | ((ref[1] < 0) ? (uint32_t)m->ref_b : 0U)) & sign_e;
+  r.unknown = (((ref[0] == 0) ? (uint32_t)m->ref_a : 0U) | ((ref[1] == 0) ? (uint32_t)m->ref_b : 0U)) & sign_e;
+  return r;
+}
+
+/*
+ * One rule with polarity pol (+1/-1) against the observed masks, the
+ * entries that follow an operating-point sign flipped or unjudgeable
+ * (rr). Returns true for a candidate (every necessary entry seen, judgeable
+ * and matched, at least one entry evaluated) with its confidence in *pct.
+ * Sums: <= 10 entries x 2 x 16.0 in Q16.16 < 2^22; x 100 < 2^29.
+ */
+static bool eval_rule(const canfdi_diagnosis_t *d, const canfdi_diagnosis_rule_t *m, int8_t pol,
+                      const rule_refs_t *rr, uint32_t *pct)
+{
+  const uint32_t op = ((uint32_t)d->obs_pos & ~rr->flip) | ((uint32_t)d->obs_neg & rr->flip);
+  const uint32_t on = ((uint32_t)d->obs_neg & ~rr->flip) | ((uint32_t)d->obs_pos & rr->flip);
   const uint32_t want_p = (pol > 0) ? m->pos : m->neg;
   const uint32_t want_n = (pol > 0) ? m->neg : m->pos;
-  const uint32_t hit = (want_p & d->obs_pos) | (want_n & d->obs_neg) | (m->zero & d->obs_zero);
-  const uint32_t seen = m->care & (uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero);
-  bool cand = ((m->nec & ~hit) == 0U) && (seen != 0U);
+  const uint32_t care = (uint32_t)m->care & ~rr->unknown;
+  const uint32_t hit = ((want_p & op) | (want_n & on) | ((uint32_t)m->zero & d->obs_zero)) & care;
+  const uint32_t seen = care & (uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero);
+  bool cand = ((m->nec & rr->unknown) == 0U) && ((m->nec & ~hit) == 0U) && (seen != 0U);
   if (cand) {
     uint32_t tot = 0U;
     uint32_t match = 0U;
@@ -400,10 +440,11 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
   for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
     const canfdi_diag_model_rule_t *r = &canfdi_diag_model_rules[i];
     if (r->comp == c) {
+      const rule_refs_t rr = refs_of(&d->rule[i], d->ref[c]);
       uint32_t pct = 0U;
       uint32_t p2 = 0U;
-      bool cand = eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &pct);
-      if ((r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &p2)) {
+      bool cand = eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &rr, &pct);
+      if ((r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &rr, &p2)) {
         if (!cand || (p2 > pct)) {
           pct = p2;
         }
@@ -426,10 +467,13 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
   }
 }
 
-/* Necessary channels of rule i all seen: its test can run. */
+/* Necessary channels of rule i all seen and judgeable at this operating
+ * point: its test can run. */
 static bool rule_testable(const canfdi_diagnosis_t *d, uint32_t i)
 {
-  return (d->rule[i].nec & ~(uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero)) == 0U;
+  const rule_refs_t rr = refs_of(&d->rule[i], d->ref[canfdi_diag_model_rules[i].comp]);
+  return ((d->rule[i].nec & ~(uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero)) == 0U) &&
+         ((d->rule[i].nec & rr.unknown) == 0U);
 }
 
 static void fill_none(int8_t report[])

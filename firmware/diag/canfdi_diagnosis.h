@@ -244,9 +244,11 @@ typedef struct {
 typedef struct {
   uint16_t care; /* entries that are not don't-care */
   uint16_t nec;  /* necessary entries */
-  uint16_t pos;  /* expected + (for polarity +1) */
+  uint16_t pos;  /* expected + (for polarity +1 and positive refs) */
   uint16_t neg;  /* expected - */
   uint16_t zero; /* expected 0 */
+  uint16_t ref_a; /* entries whose sign follows the component's ref 'a' */
+  uint16_t ref_b; /* ... ref 'b' */
 } canfdi_diagnosis_rule_t;
 
 
@@ -271,6 +273,7 @@ typedef struct {
   uint16_t obs_pos;  /* observed masks of that component */
   uint16_t obs_neg;
   uint16_t obs_zero;
+  int8_t ref[CANFDI_DIAG_N_COMP][2]; /* operating-point signs of this step */
   uint16_t win_n[CANFDI_DIAG_N_COMP]; /* consecutive wins of res.best */
   uint8_t win_id[CANFDI_DIAG_N_COMP];
   bool corr_not_isolated;

@@ -11,7 +11,7 @@
  * the threshold, sign kept); parameter deviations are (estimate - nominal) /
  * nominal in Q16.16 (6554 ~ +10 %). A quantity whose valid bit is clear must
  * be ignored (not converged, excluded, or not computed in this mode).
- * Memory: 76 bytes on a 32-bit target. Cost: none (data only).
+ * Memory: 80 bytes on a 32-bit target. Cost: none (data only).
  */
 #ifndef CANFDI_SYMPTOMS_H
 #define CANFDI_SYMPTOMS_H
@@ -70,6 +70,12 @@ typedef struct {
   uint8_t dcm_pdev_valid; /* bit i: dcm_pdev_q16[i] valid (converged) */
   uint8_t thr_pdev_valid;
   uint32_t flags;         /* CANFDI_SYM_F_* */
+  /* Operating-point signs a rule's entries may refer to (the sign a
+   * residual takes for a fault follows the speed, the current, ...:
+   * canfdi_diagnosis.h, refs): -1, +1, or 0 while the quantity is too small
+   * to tell, when an entry that refers to it cannot be judged. */
+  int8_t dcm_ref[2];      /* 'a': speed w, 'b': armature current I_A */
+  int8_t thr_ref[2];      /* 'a': motor voltage command, 'b': motor current */
   /* Measured U_A minus the bridge command applied over the same interval,
    * filtered, / its threshold (Q16.16, 1.0 = threshold; the actuator
    * monitor UAC, detect/canfdi_actmon.h). It is the one signal that tells

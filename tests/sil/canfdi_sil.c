@@ -428,6 +428,26 @@ static int judge_state(const canfdi_sim_expect_t *e, char *msg, size_t cap)
   return ok;
 }
 
+/* The diagnosis' persistent symptom per channel (+ - 0, '?' not valid) and
+ * the operating-point reference signs, one line on stderr (--symptoms). */
+static void print_diag_symptoms(const canfdi_diagnosis_t *d)
+{
+  static const char mark[4] = {'-', '0', '+', '?'};
+  char line[2][CANFDI_DIAG_N_CH + 1U];
+  uint8_t c;
+  uint8_t ch;
+  for (c = 0U; c < 2U; c++) {
+    for (ch = 0U; ch < CANFDI_DIAG_N_CH; ch++) {
+      const int8_t v = canfdi_diagnosis_symptom(d, (c == 0U) ? CANFDI_COMPONENT_DC_MOTOR : CANFDI_COMPONENT_THROTTLE, ch);
+      line[c][ch] = mark[(v >= -1) && (v <= 2) ? v + 1 : 3];
+    }
+    line[c][CANFDI_DIAG_N_CH] = '\0';
+  }
+  fprintf(stderr, "       sym dcm %.4s %.4s %.2s ref %+d%+d | thr %.4s %.4s ref %+d%+d\n", line[0], &line[0][4],
+          &line[0][8], d->ref[CANFDI_DIAG_COMP_DCM][0], d->ref[CANFDI_DIAG_COMP_DCM][1], line[1], &line[1][4],
+          d->ref[CANFDI_DIAG_COMP_THR][0], d->ref[CANFDI_DIAG_COMP_THR][1]);
+}
+
 int main(int argc, char **argv)
 {
   const char *scn_path = NULL;
@@ -725,6 +745,7 @@ int main(int argc, char **argv)
               y->thr_rn_q16[1] / 65536.0, y->thr_rn_q16[2] / 65536.0, y->thr_rn_q16[3] / 65536.0,
               y->thr_pdev_q16[0] / 65536.0, y->thr_pdev_q16[1] / 65536.0, y->thr_pdev_q16[2] / 65536.0,
               y->thr_pdev_q16[3] / 65536.0, y->thr_pdev_valid, (unsigned)y->flags);
+      print_diag_symptoms(&app.diagnosis);
     }
     if ((out != NULL) && ((k % decimate) == 0U)) {
       fprintf(out,

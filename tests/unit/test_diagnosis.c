@@ -106,6 +106,12 @@ static void build(canfdi_symptoms_t *s, const vec_t *v, double rn_noise, double 
   s->thr_pdev_valid = 0x0FU;
   s->dcm_ua_cmd_rn_q16 = Q16(v->uac + (rn_noise * noise()));
   s->flags = v->flags;
+  /* the vectors are those of the forward-motoring operating point: speed,
+   * current, throttle voltage and current all positive */
+  s->dcm_ref[0] = 1;
+  s->dcm_ref[1] = 1;
+  s->thr_ref[0] = 1;
+  s->thr_ref[1] = 1;
 }
 
 static canfdi_diagnosis_t dg;

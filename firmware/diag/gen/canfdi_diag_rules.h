@@ -2,7 +2,7 @@
 /*
  * canfdi_diag_rules.h - the rule tables of fault-symptom reasoning
  * (diag/canfdi_diagnosis.h explains the patterns and the flags).
- * Memory: 16 bytes per model rule, 16 per hard rule, in ROM.
+ * Memory: 29 bytes per model rule, 12 per hard rule, in ROM.
  */
 #ifndef CANFDI_DIAG_RULES_H
 #define CANFDI_DIAG_RULES_H
@@ -19,12 +19,16 @@
 #define CANFDI_DIAG_PATTERN_LEN 13U
 
 /* Pattern: one character per channel, spaces ignored: '+' '-' '0'
- * supporting, 'P' 'N' 'Z' necessary, '.' don't care. */
+ * supporting, 'P' 'N' 'Z' necessary, '.' don't care. Refs, laid out
+ * like the pattern: the sign an entry expects is multiplied by the
+ * component's operating-point sign 'a' or 'b' (canfdi_symptoms_t
+ * dcm_ref / thr_ref), '.' none. */
 typedef struct {
   uint8_t fault;
   uint8_t comp;    /* CANFDI_DIAG_COMP_* */
   uint8_t bipolar; /* the pattern or its negation */
   char pattern[CANFDI_DIAG_PATTERN_LEN];
+  char refs[CANFDI_DIAG_PATTERN_LEN];
 } canfdi_diag_model_rule_t;
 
 /* Flags (CANFDI_SYM_F_*): all of `req` persistently, none of `forbid`;
