@@ -538,7 +538,7 @@ RULE_COLUMNS = ["fault", "kind", "polarity", "pattern", "refs", "required", "for
 # firmware/diag/canfdi_symptoms.h; the C compiler checks the names).
 RULE_FLAGS = ["TPS1_LOW", "TPS1_HIGH", "TPS2_LOW", "TPS2_HIGH", "TPS1_OUTLIER", "TPS2_OUTLIER",
               "BRIDGE_A_DEAD", "BRIDGE_B_DEAD", "THR_NOT_FOLLOWING", "THR_NO_CURRENT",
-              "TPS1_INVALID", "TPS2_INVALID"]
+              "DCM_W_JUMP", "TPS1_INVALID", "TPS2_INVALID"]
 # Symptom channels per component, in pattern order (canfdi_diagnosis.h).
 RULE_CHANNELS = {"dc_motor": 10, "throttle": 10}
 RULE_COMP_C = {"dc_motor": "CANFDI_DIAG_COMP_DCM", "throttle": "CANFDI_DIAG_COMP_THR"}

@@ -86,13 +86,55 @@ static void stage_vote(canfdi_app_t *app)
 /* Stage 3: both controllers, in the mode the manager set last step. TRACK
  * runs the controller (the manager's tracked value is the controller's own
  * output at a bridge switch, or 0 while the drive is held off). */
+/* Stage 3a: whether the test signals run this step (canfdi_app_test.h),
+ * on the last step's states and diagnosis. */
+static void stage_test(canfdi_app_t *app)
+{
+  const canfdi_actmgr_out_t *m = &app->fb.mgr;
+  const canfdi_diagnosis_result_t *rd = canfdi_diagnosis_result(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR);
+  const canfdi_diagnosis_result_t *rt = canfdi_diagnosis_result(&app->diagnosis, CANFDI_COMPONENT_THROTTLE);
+  canfdi_app_test_in_t d;
+  canfdi_app_test_in_t t;
+  bool dcm_on;
+  bool thr_on;
+  d.ref_usable = IN_USABLE(app, CANFDI_RX_IN_SP_DCM_SPEED);
+  d.ref_q16 = IN_VAL(app, CANFDI_RX_IN_SP_DCM_SPEED);
+  d.closed_loop = (m->dcm_ctrl_mode != CANFDI_CTRL_OFF) && (m->dcm_state == CANFDI_DEG_NORMAL);
+  d.excited = app->dcm.est_on && canfdi_est_dcm_excited(&app->est_dcm);
+  d.need = (rd != NULL) && rd->detected && rd->not_isolated;
+  d.unlearnt = app->dcm.est_on && !canfdi_est_dcm_arm_converged(&app->est_dcm);
+  t.ref_usable = IN_USABLE(app, CANFDI_RX_IN_SP_THR_ANGLE);
+  t.ref_q16 = IN_VAL(app, CANFDI_RX_IN_SP_THR_ANGLE);
+  t.closed_loop = (m->thr_ctrl_mode != CANFDI_CTRL_OFF) && (m->thr_state == CANFDI_DEG_NORMAL);
+  t.excited = app->thr.est_on && canfdi_est_thr_excited(&app->est_thr);
+  t.need = (rt != NULL) && rt->detected && rt->not_isolated;
+  t.unlearnt = app->thr.est_on && !canfdi_est_thr_el_converged(&app->est_thr);
+  /* a component's first symptom: its estimator becomes alert (covariance
+   * boost), so that the parameter evidence the isolation may need arrives
+   * within the diagnosis' freshness count */
+  if ((rd != NULL) && rd->detected && !app->fb.dcm_detected) {
+    canfdi_est_dcm_boost(&app->est_dcm);
+  }
+  if ((rt != NULL) && rt->detected && !app->fb.thr_detected) {
+    canfdi_est_thr_boost(&app->est_thr);
+  }
+  app->fb.dcm_detected = (rd != NULL) && rd->detected;
+  app->fb.thr_detected = (rt != NULL) && rt->detected;
+  canfdi_app_test_step(&app->test, &app->cal.test, &d, &t, &dcm_on, &thr_on);
+  canfdi_excite_enable(&app->excite_dcm, dcm_on && app->cal.excite_dcm_on);
+  canfdi_excite_enable(&app->excite_thr, thr_on && app->cal.excite_thr_on);
+}
+
 static void stage_control(canfdi_app_t *app, int32_t *u_dcm, int32_t *u_thr)
 {
   canfdi_ctrl_dcm_in_t din;
   canfdi_ctrl_thr_in_t tin;
   const canfdi_actmgr_out_t *m = &app->fb.mgr;
-  const int32_t ex_dcm = canfdi_excite_step_q16(&app->excite_dcm);
-  const int32_t ex_thr = canfdi_excite_step_q16(&app->excite_thr);
+  int32_t ex_dcm;
+  int32_t ex_thr;
+  stage_test(app);
+  ex_dcm = canfdi_excite_step_q16(&app->excite_dcm);
+  ex_thr = canfdi_excite_step_q16(&app->excite_thr);
   const uint8_t dmode = (m->dcm_ctrl_mode == CANFDI_CTRL_OFF) ? (uint8_t)CANFDI_CTRL_OFF : (uint8_t)CANFDI_CTRL_RUN;
   const uint8_t tmode = (m->thr_ctrl_mode == CANFDI_CTRL_OFF) ? (uint8_t)CANFDI_CTRL_OFF : (uint8_t)CANFDI_CTRL_RUN;
   din.speed_ref_rad_s_q16 = IN_USABLE(app, CANFDI_RX_IN_SP_DCM_SPEED) ? IN_VAL(app, CANFDI_RX_IN_SP_DCM_SPEED) : 0;
@@ -141,7 +183,7 @@ static void stage_gates(canfdi_app_t *app)
   const bool thr_est = thr_ok && app->fb.mgr.thr.enable && app->vote_out.valid && !app->fb.thr_no_current;
   bool rp;
   bool re;
-  gate(&app->dcm, dcm_ok, dcm_ok && !app->fb.dcm_ua_bad, app->running,
+  gate(&app->dcm, dcm_ok, dcm_ok && !app->fb.dcm_sensor_bad, app->running,
        canfdi_est_dcm_has_run(&app->est_dcm), &rp, &re);
   if (rp) {
     canfdi_parity_dcm_reset(&app->parity_dcm);
@@ -282,8 +324,19 @@ static void update_feedback(canfdi_app_t *app)
   const int8_t uac = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR,
                                               (uint8_t)CANFDI_DIAG_CH_DCM_UAC);
   app->fb.thr_arm_symptom = (arm == CANFDI_DIAG_SYM_POS) || (arm == CANFDI_DIAG_SYM_NEG);
-  app->fb.dcm_ua_bad = (uac == CANFDI_DIAG_SYM_POS) || (uac == CANFDI_DIAG_SYM_NEG) ||
-                       ((app->fb.faults & CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_UA_SENSOR_OFFSET)) != 0U);
+  const uint8_t iso = canfdi_diagnosis_isolated(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR, NULL);
+  const uint32_t sensor_faults = CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_UA_SENSOR_OFFSET) |
+                                 CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_IA_SENSOR_OFFSET) |
+                                 CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN) |
+                                 CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET);
+  /* the estimator learns only from sensors not known bad: a U_A that
+   * disagrees with its command, a speed step the torque cannot give, a
+   * sensor fault isolated now or acted on by the manager (its estimates
+   * would be learnt from the faulty signal and outlive the fault) */
+  app->fb.dcm_sensor_bad = (uac == CANFDI_DIAG_SYM_POS) || (uac == CANFDI_DIAG_SYM_NEG) ||
+                           ((app->sym.flags & CANFDI_SYM_F_DCM_W_JUMP) != 0U) ||
+                           ((iso != 0U) && ((CANFDI_FAULT_BIT(iso) & sensor_faults) != 0U)) ||
+                           ((app->fb.faults & sensor_faults) != 0U);
   app->fb.thr_no_current = app->actmon_out.thr_no_current;
 }
 

@@ -102,6 +102,7 @@
 
 #include "app/canfdi_app_cal.h"
 #include "app/canfdi_app_out.h"
+#include "app/canfdi_app_test.h"
 #include "comm/canfdi_rx.h"
 #include "comm/canfdi_tx.h"
 #include "core/canfdi_common.h"
@@ -144,8 +145,10 @@ typedef struct {
   canfdi_actmgr_out_t mgr; /* commands applied over the interval ending now, states */
   uint32_t faults;         /* fault bits the manager acted on */
   bool thr_arm_symptom;    /* persistent throttle armature symptom: model not voted */
-  bool dcm_ua_bad;         /* U_A known bad: the DC-motor estimator is not fed */
+  bool dcm_sensor_bad;     /* a DC-motor sensor known bad: its estimator is not fed */
   bool thr_no_current;     /* throttle motor draws no current: its estimator is not fed */
+  bool dcm_detected;       /* the diagnosis showed a DC-motor symptom */
+  bool thr_detected;       /* ... a throttle symptom */
 } canfdi_app_fb_t;
 
 /* Which plant's models run and learn; state, not counters. */
@@ -163,6 +166,7 @@ typedef struct {
   canfdi_ctrl_thr_t ctrl_thr;
   canfdi_excite_t excite_dcm;
   canfdi_excite_t excite_thr;
+  canfdi_app_test_t test;  /* when the test signals run */
   canfdi_parity_dcm_t parity_dcm;
   canfdi_parity_thr_t parity_thr;
   canfdi_est_dcm_t est_dcm;

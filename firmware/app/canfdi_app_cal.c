@@ -33,6 +33,7 @@ static void cal_excitation(canfdi_app_cal_t *cal)
   cal->excite_thr.sine_amp_q16 = CANFDI_Q16_MILLI(52);
   cal->excite_thr.sine_period_us = 500000U;
   cal->excite_thr_on = true;
+  canfdi_app_test_default_cfg(&cal->test);
 }
 
 static void cal_models(canfdi_app_cal_t *cal)

@@ -17,6 +17,7 @@
 
 #include "app/canfdi_app_sym.h"
 #include "comm/canfdi_rx.h"
+#include "app/canfdi_app_test.h"
 #include "core/canfdi_common.h"
 #include "ctrl/canfdi_ctrl_dcm.h"
 #include "ctrl/canfdi_ctrl_thr.h"
@@ -43,8 +44,9 @@ typedef struct {
   canfdi_ctrl_thr_cal_t ctrl_thr;
   canfdi_excite_cfg_t excite_dcm; /* added to the speed reference, rad/s */
   canfdi_excite_cfg_t excite_thr; /* added to the angle reference, rad */
-  bool excite_dcm_on;
+  bool excite_dcm_on;              /* the test signal may run at all ... */
   bool excite_thr_on;
+  canfdi_app_test_cfg_t test;      /* ... and runs when these conditions say */
   canfdi_parity_dcm_cfg_t parity_dcm;
   canfdi_parity_thr_cfg_t parity_thr;
   canfdi_est_dcm_cfg_t est_dcm;

@@ -17,6 +17,7 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
       (canfdi_ctrl_thr_init(&app->ctrl_thr, &c->ctrl_thr) != CANFDI_OK) ||
       (canfdi_excite_init(&app->excite_dcm, &c->excite_dcm) != CANFDI_OK) ||
       (canfdi_excite_init(&app->excite_thr, &c->excite_thr) != CANFDI_OK) ||
+      (canfdi_app_test_init(&app->test, &c->test) != CANFDI_OK) ||
       (canfdi_parity_dcm_init(&app->parity_dcm, &c->parity_dcm) != CANFDI_OK) ||
       (canfdi_parity_thr_init(&app->parity_thr, &c->parity_thr) != CANFDI_OK) ||
       (canfdi_est_dcm_init(&app->est_dcm, &c->est_dcm) != CANFDI_OK) ||
@@ -50,8 +51,8 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
     rc = init_modules(app, now_us);
     if (rc == CANFDI_OK) {
       uint32_t i;
-      canfdi_excite_enable(&app->excite_dcm, app->cal.excite_dcm_on);
-      canfdi_excite_enable(&app->excite_thr, app->cal.excite_thr_on);
+      canfdi_excite_enable(&app->excite_dcm, false);
+      canfdi_excite_enable(&app->excite_thr, false);
       canfdi_app_out_init(&app->out, &app->dtc);
       canfdi_uptime_init(&app->uptime, now_us);
       for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {

@@ -18,6 +18,8 @@ void canfdi_app_sym_default_cfg(canfdi_app_sym_cfg_t *cfg)
     cfg->thr_u_on_V_q16 = CANFDI_Q16_ONE;
     cfg->thr_i_on_A_q16 = CANFDI_Q16_MILLI(100);
     cfg->mech_settle_steps = 1000U;
+    cfg->w_jump_rad_s_q16 = CANFDI_Q16_MILLI(2500);
+    cfg->w_jump_hold_steps = 50U;
   }
 }
 
@@ -25,13 +27,17 @@ int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg
 {
   int32_t rc = -CANFDI_EINVAL;
   if ((m != NULL) && (cfg != NULL) && (cfg->dcm_w_on_rad_s_q16 > 0) && (cfg->dcm_i_on_A_q16 > 0) &&
-      (cfg->thr_u_on_V_q16 > 0) && (cfg->thr_i_on_A_q16 > 0)) {
+      (cfg->thr_u_on_V_q16 > 0) && (cfg->thr_i_on_A_q16 > 0) && (cfg->w_jump_rad_s_q16 > 0)) {
     m->cfg = *cfg;
     m->dcm_ref[0] = 0;
     m->dcm_ref[1] = 0;
     m->thr_ref[0] = 0;
     m->thr_ref[1] = 0;
     m->mech_hold = cfg->mech_settle_steps;
+    m->w_prev_q16 = 0;
+    m->w_prev_ok = false;
+    m->jump_hold = 0U;
+    m->jump = false;
     rc = CANFDI_OK;
   }
   return rc;
@@ -76,6 +82,59 @@ static void references(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfd
   s->thr_ref[1] = m->thr_ref[1];
 }
 
+/* T in seconds, Q24 (the step of canfdi_config.h) */
+#define STEP_S_Q24 ((int32_t)(((int64_t)CANFDI_CFG_STEP_US * 16777216 + 500000) / 1000000))
+
+/* The speed-step plausibility of the header. Scaling: torque Q16.16 N m
+ * (saturating sums); x T (Q24 s) / J (Q24 kg m^2): the product rounded to
+ * Q16.16 N m s, divided by J in Q24 -> Q16.16 rad/s (saturating). */
+static void speed_jump(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, const canfdi_symptoms_t *s)
+{
+  const canfdi_est_dcm_cfg_t *c = &in->est_dcm->cfg;
+  const bool ok = in->dcm_in_ok;
+  bool jump_now = false;
+  if (ok && m->w_prev_ok && (c->j_nom_q24 > 0)) {
+    const int32_t mf0 = canfdi_sub_s32_sat(c->mc_nom_q16, in->load_nom_Nm_q16);
+    int32_t torque = canfdi_sub_s32_sat(canfdi_mul_s32_qn(c->psi_nom_q16, in->dcm_i_A_q16, 16U),
+                                        in->load_known_Nm_q16);
+    if (m->dcm_ref[0] != 0) {
+      torque = canfdi_sub_s32_sat(torque, (m->dcm_ref[0] > 0) ? mf0 : canfdi_q31_neg(mf0));
+    }
+    {
+      const int32_t dw_exp = canfdi_div_s32_qn(canfdi_mul_s32_qn(torque, STEP_S_Q24, 24U), c->j_nom_q24, 24U);
+      const int32_t dw = canfdi_sub_s32_sat(in->dcm_w_rad_s_q16, m->w_prev_q16);
+      jump_now = canfdi_q31_abs(canfdi_sub_s32_sat(dw, dw_exp)) > m->cfg.w_jump_rad_s_q16;
+    }
+  }
+  if (jump_now) {
+    m->jump = true;
+    m->jump_hold = m->cfg.w_jump_hold_steps;
+  } else if (m->jump_hold > 0U) {
+    m->jump_hold--;
+  } else if (m->jump && ((s->dcm_rn_valid & 1U) != 0U) && (canfdi_q31_abs(s->dcm_rn_q16[0]) >= CANFDI_Q16_ONE)) {
+    /* held while r1 stays out of its band */
+  } else {
+    m->jump = false;
+  }
+  m->w_prev_q16 = in->dcm_w_rad_s_q16;
+  m->w_prev_ok = ok;
+}
+
+/* The UAC channel (canfdi_symptoms.h): while r1 is beyond its threshold,
+ * (U_A - command) / (|r1| / 2), so that its scale follows r1's; else the
+ * monitor's own normalisation. Scaling: Q16.16 V / Q16.16 V -> Q16.16
+ * (saturating). */
+static int32_t uac_channel(const canfdi_app_sym_in_t *in, const canfdi_symptoms_t *s)
+{
+  const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
+  int32_t x = in->actmon->dcm_uac_rn_q16;
+  if (in->actmon->dcm_uac_valid && (pd != NULL) && ((s->dcm_rn_valid & 1U) != 0U) &&
+      (canfdi_q31_abs(s->dcm_rn_q16[0]) >= CANFDI_Q16_ONE)) {
+    x = canfdi_div_s32_qn(in->actmon->dcm_uac_V_q16, canfdi_q31_abs(pd->r_q16[0]) / 2, 16U);
+  }
+  return x;
+}
+
 /* (est - nom) / nom in Q16.16, saturating; both in the same Q format. */
 static int32_t pdev_q16(int32_t est, int32_t nom)
 {
@@ -93,6 +152,27 @@ static void residuals(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   }
   s->dcm_rn_valid = ((pd != NULL) && in->dcm_in_ok) ? pd->valid : 0U;
   s->thr_rn_valid = ((pt != NULL) && in->thr_in_ok) ? pt->valid : 0U;
+}
+
+/* RAX (canfdi_symptoms.h): (R_A,est - R_A,model) I_A / r1 / 0.5 while |r1|
+ * is beyond its threshold, 0 while r1 is in band (nothing to explain);
+ * valid while the armature estimate has converged and is fed. Scaling: the
+ * model's R_A is Q24, taken to Q16.16; dR x I in Q16.16 V (rounded,
+ * saturated); the quotient by r1 in Q16.16 times 2. */
+static void dcm_rax(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+{
+  const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
+  const canfdi_est_dcm_t *e = in->est_dcm;
+  s->dcm_rax_q16 = 0;
+  if ((pd != NULL) && in->dcm_in_ok && in->dcm_est_on && canfdi_est_dcm_arm_converged(e) &&
+      ((pd->valid & 1U) != 0U) && (pd->thr_q16[0] > 0)) {
+    if (canfdi_q31_abs(pd->r_q16[0]) >= pd->thr_q16[0]) {
+      const int32_t dr = canfdi_sub_s32_sat(canfdi_est_dcm_ra_q16(e), pd->ra_hat_ohm_q24 / 256);
+      const int32_t du = canfdi_mul_s32_qn(dr, in->dcm_i_A_q16, 16U);
+      s->dcm_rax_q16 = canfdi_mul_s32_qn(canfdi_div_s32_qn(du, pd->r_q16[0], 16U), 2 * CANFDI_Q16_ONE, 16U);
+    }
+    s->flags |= CANFDI_SYM_F_DCM_RAX_VALID;
+  }
 }
 
 static void dcm_parameters(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
@@ -113,6 +193,7 @@ static void dcm_parameters(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t 
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J] = pdev_q16(canfdi_est_dcm_j_q24(e), c->j_nom_q24);
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_FRICTION] =
       (c->mc_nom_q16 != 0) ? canfdi_div_s32_qn(canfdi_sub_s32_sat(mf0, mf0_nom), c->mc_nom_q16, 16U) : 0;
+  s->dcm_upd = in->dcm_est_on ? canfdi_est_dcm_updated(e) : 0U;
   s->dcm_pdev_valid = !in->dcm_est_on ? 0U
                                       : (uint8_t)((canfdi_est_dcm_arm_converged(e) ? 0x03U : 0U) | mech);
 }
@@ -124,6 +205,7 @@ static void thr_parameters(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   s->thr_pdev_q16[CANFDI_SYM_THR_P_K] = pdev_q16(canfdi_est_thr_k_q16(e), e->cfg.k_nom_q16);
   s->thr_pdev_q16[CANFDI_SYM_THR_P_SPRING] = canfdi_est_thr_fast_spring_dev_q16(e);
   s->thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] = canfdi_est_thr_fast_friction_dev_q16(e);
+  s->thr_upd = in->thr_est_on ? canfdi_est_thr_updated(e) : 0U;
   s->thr_pdev_valid = !in->thr_est_on ? 0U
                                       : (uint8_t)((canfdi_est_thr_el_converged(e) ? 0x03U : 0U) |
                                                   (canfdi_est_thr_fast_valid(e) ? 0x0CU : 0U));
@@ -170,5 +252,8 @@ void canfdi_app_sym_build(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   dcm_parameters(m, in, s);
   thr_parameters(in, s);
   s->flags = flags(in);
-  s->dcm_ua_cmd_rn_q16 = in->actmon->dcm_uac_rn_q16;
+  speed_jump(m, in, s);
+  s->flags |= m->jump ? CANFDI_SYM_F_DCM_W_JUMP : 0U;
+  dcm_rax(in, s);
+  s->dcm_ua_cmd_rn_q16 = uac_channel(in, s);
 }

@@ -28,6 +28,18 @@
  * after a reversal, and near standstill Coulomb friction is whatever holds
  * the rotor.
  *
+ * Speed-step plausibility (CANFDI_SYM_F_DCM_W_JUMP). Between two valid
+ * samples the shaft's speed can only change by what the drive's torque
+ * gives: dw = (Psi I_A - M_F0 sgn(w) - M_L) T / J with the nominal Psi,
+ * J and Coulomb friction (the estimator's configuration) and the known
+ * load. A measured step that differs from it by more than
+ * cfg.w_jump_rad_s (noise of two speed samples, about 0.3 rad/s rms,
+ * plus the model's error at the largest currents) is a step of the
+ * sensor, not of the shaft: an abrupt speed-sensor offset or gain. The flag
+ * is held for w_jump_hold_steps and then as long as the armature residual
+ * r1 stays out of its band (a sensor step leaves r1 out of band; a single
+ * noisy sample does not).
+ *
  * Operating-point references (canfdi_symptoms_t dcm_ref, thr_ref: the signs
  * a rule's entries may follow, canfdi_diagnosis.h): the sign of the speed
  * and the armature current, of the throttle's voltage command and motor
@@ -36,8 +48,8 @@
  *
  * Scaling and overflow: Q16.16; deviations by canfdi_div_s32_qn
  * (saturating), differences by saturating subtraction. Cost: 8 saturating
- * divisions and ~40 compares per step. Memory: 24 bytes of state and
- * configuration; no heap.
+ * divisions, 2 multiplications and ~50 compares per step. Memory: 48 bytes
+ * of state and configuration; no heap.
  */
 #ifndef CANFDI_APP_SYM_H
 #define CANFDI_APP_SYM_H
@@ -56,6 +68,8 @@ typedef struct {
   int32_t thr_u_on_V_q16;       /* > 0: |u| of the throttle command */
   int32_t thr_i_on_A_q16;       /* > 0: |i| of the throttle motor */
   uint16_t mech_settle_steps;   /* mechanical estimates invalid after a speed sign change */
+  int32_t w_jump_rad_s_q16;     /* > 0: implausible speed step per sample */
+  uint16_t w_jump_hold_steps;   /* the jump flag held at least this long */
 } canfdi_app_sym_cfg_t;
 
 typedef struct {
@@ -63,6 +77,10 @@ typedef struct {
   int8_t dcm_ref[2];            /* the references of the last step */
   int8_t thr_ref[2];
   uint16_t mech_hold;           /* steps the mechanical estimates stay invalid */
+  int32_t w_prev_q16;           /* last valid speed sample */
+  bool w_prev_ok;               /* w_prev_q16 is the previous step's valid sample */
+  uint16_t jump_hold;           /* steps the jump flag is held at least */
+  bool jump;                    /* the jump flag */
 } canfdi_app_sym_t;
 
 typedef struct {

@@ -78,9 +78,11 @@ static void step_uac(canfdi_actmon_t *m, const canfdi_actmon_in_t *in, canfdi_ac
     m->uac_V_q16 = lowpass(m->uac_V_q16, canfdi_sub_s32_sat(in->dcm_ua_V_q16, in->dcm_u_cmd_V_q16),
                            c->uac_alpha_q16);
     out->dcm_uac_rn_q16 = canfdi_div_s32_qn(m->uac_V_q16, c->uac_thr_V_q16, 16U);
+    out->dcm_uac_V_q16 = m->uac_V_q16;
     canfdi_count_inc(&m->diag.uac_judged_steps);
   } else {
     out->dcm_uac_rn_q16 = 0;
+    out->dcm_uac_V_q16 = 0;
   }
 }
 

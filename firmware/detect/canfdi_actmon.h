@@ -77,6 +77,7 @@ typedef struct {
   bool thr_no_current;           /* open-circuit monitor: symptom present */
   bool dcm_uac_valid;            /* UAC judged this step */
   int32_t dcm_uac_rn_q16;        /* filtered (U_A - command) / uac_thr; 0 when not judged */
+  int32_t dcm_uac_V_q16;         /* filtered U_A - command, V; 0 when not judged */
   int32_t thr_track_err_rad_q16; /* the filtered tracking error */
 } canfdi_actmon_out_t;
 

@@ -64,6 +64,7 @@ void canfdi_diagnosis_default_cfg(canfdi_diagnosis_cfg_t *cfg)
     cfg->isolate_steps = 20U;
     cfg->conf_min_pct = 50U;
     cfg->margin_pct = 10U;
+    cfg->par_fresh_updates = 20U;
     /* 1 % = 655.36 in Q16.16 */
     cfg->dcm_par_pos_q16[CANFDI_SYM_DCM_P_RA] = 5243;   /* +8 % */
     cfg->dcm_par_neg_q16[CANFDI_SYM_DCM_P_RA] = 13107;  /* -20 % */
@@ -106,6 +107,7 @@ int32_t canfdi_diagnosis_cfg_check(const canfdi_diagnosis_cfg_t *cfg)
              !steps_ok(cfg->sym_on_steps) || !steps_ok(cfg->sym_off_steps) ||
              !steps_ok(cfg->flag_on_steps) || !steps_ok(cfg->flag_off_steps) ||
              !steps_ok(cfg->isolate_steps) || (cfg->conf_min_pct > 100U) || (cfg->margin_pct > 100U) ||
+             (cfg->par_fresh_updates > STEPS_MAX) ||
              !par_ok(cfg->jpsi_q16)) {
     rc = -CANFDI_EINVAL;
   } else {
@@ -140,6 +142,9 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
       d->res[c] = (canfdi_diagnosis_result_t){0};
       d->win_n[c] = 0U;
       d->win_id[c] = 0U;
+      d->latched[c] = false;
+      d->fresh[c][0] = 0U;
+      d->fresh[c][1] = 0U;
     }
     for (j = 0U; j < CANFDI_DIAG_N_FLAGS; j++) {
       pers_clear(&d->flag[j], CANFDI_DIAG_SYM_ZERO);
@@ -286,6 +291,41 @@ static int32_t par_norm(const canfdi_diagnosis_t *d, uint32_t c, uint32_t i, int
   return canfdi_mul_s32_qn(dev, inv, 16U);
 }
 
+/* Estimator updates since the component's symptoms appeared: counted while
+ * it was detected in the last step, from 0 at the first detected step. */
+static void count_fresh(canfdi_diagnosis_t *d, uint32_t c, uint8_t upd)
+{
+  uint32_t k;
+  for (k = 0U; k < 2U; k++) {
+    const bool u = ((((uint32_t)upd) >> k) & 1U) != 0U;
+    if (!d->res[c].detected) {
+      d->fresh[c][k] = 0U;
+    } else if (u && (d->fresh[c][k] < d->cfg.par_fresh_updates)) {
+      d->fresh[c][k]++;
+    } else {
+      /* no update, or enough */
+    }
+  }
+}
+
+/* Parameter channels whose 0 is stale in component c (estimator A or B
+ * has not had par_fresh_updates updates since the symptoms appeared). */
+static uint16_t stale_mask(const canfdi_diagnosis_t *d, uint32_t c)
+{
+  const bool a = d->fresh[c][0] < d->cfg.par_fresh_updates;
+  const bool b = d->fresh[c][1] < d->cfg.par_fresh_updates;
+  uint16_t m = 0U;
+  if (c == CANFDI_DIAG_COMP_DCM) {
+    m = (uint16_t)((a ? ((1U << CANFDI_DIAG_CH_DCM_RA) | (1U << CANFDI_DIAG_CH_DCM_PSI)) : 0U) |
+                   (a ? (1U << CANFDI_DIAG_CH_DCM_RAX) : 0U) | (b ? (1U << CANFDI_DIAG_CH_DCM_MC) : 0U) |
+                   ((a || b) ? (1U << CANFDI_DIAG_CH_DCM_JPSI) : 0U));
+  } else {
+    m = (uint16_t)((a ? ((1U << CANFDI_DIAG_CH_THR_R) | (1U << CANFDI_DIAG_CH_THR_K)) : 0U) |
+                   (b ? ((1U << CANFDI_DIAG_CH_THR_SPRING) | (1U << CANFDI_DIAG_CH_THR_FRICTION)) : 0U));
+  }
+  return m;
+}
+
 static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
 {
   uint32_t i;
@@ -295,16 +335,23 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
     d->ref[CANFDI_DIAG_COMP_DCM][i] = s->dcm_ref[i];
     d->ref[CANFDI_DIAG_COMP_THR][i] = s->thr_ref[i];
   }
+  count_fresh(d, CANFDI_DIAG_COMP_DCM, s->dcm_upd);
+  count_fresh(d, CANFDI_DIAG_COMP_THR, s->thr_upd);
   for (i = 0U; i < CANFDI_SYM_N_RES; i++) {
     channel(d, CANFDI_DIAG_COMP_DCM, i, s->dcm_rn_q16[i], (s->dcm_rn_valid & (1U << i)) != 0U);
     channel(d, CANFDI_DIAG_COMP_THR, i, s->thr_rn_q16[i], (s->thr_rn_valid & (1U << i)) != 0U);
   }
   for (i = 0U; i < CANFDI_SYM_N_PAR; i++) {
-    channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_SYM_N_RES + i, par_norm(d, CANFDI_DIAG_COMP_DCM, i, s->dcm_pdev_q16[i]),
-            (s->dcm_pdev_valid & (1U << i)) != 0U);
+    if ((CANFDI_SYM_N_RES + i) != CANFDI_DIAG_CH_DCM_RAX) {
+      /* J enters through J/Psi only; its slot carries RAX */
+      channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_SYM_N_RES + i,
+              par_norm(d, CANFDI_DIAG_COMP_DCM, i, s->dcm_pdev_q16[i]), (s->dcm_pdev_valid & (1U << i)) != 0U);
+    }
     channel(d, CANFDI_DIAG_COMP_THR, CANFDI_SYM_N_RES + i, par_norm(d, CANFDI_DIAG_COMP_THR, i, s->thr_pdev_q16[i]),
             (s->thr_pdev_valid & (1U << i)) != 0U);
   }
+  channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_DIAG_CH_DCM_RAX, s->dcm_rax_q16,
+          (s->flags & CANFDI_SYM_F_DCM_RAX_VALID) != 0U);
   v = ((s->dcm_pdev_valid & (1U << CANFDI_SYM_DCM_P_J)) != 0U) &&
       ((s->dcm_pdev_valid & (1U << CANFDI_SYM_DCM_P_PSI)) != 0U);
   x = canfdi_mul_s32_qn(canfdi_sub_s32_sat(s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J],
@@ -370,6 +417,12 @@ static void observe(canfdi_diagnosis_t *d, uint32_t c)
     }
     d->w_q16[j] = w;
   }
+  if ((pos | neg) != 0U) {
+    /* symptoms present: a parameter's 0 is evidence only once its
+     * estimator has learnt from data after they appeared (a held or slow
+     * estimate reads 0 whatever the fault) */
+    zero = (uint16_t)(zero & ~stale_mask(d, c));
+  }
   d->obs_pos = pos;
   d->obs_neg = neg;
   d->obs_zero = zero;
@@ -428,10 +481,19 @@ static bool eval_rule(const canfdi_diagnosis_t *d, const canfdi_diagnosis_rule_t
   return cand;
 }
 
-/* Best and second candidate of component c (model rules), into res. */
+/* The primary trouble code of a fault (catalogue). */
+static uint32_t code_of(uint8_t fault)
+{
+  return (fault < CANFDI_FAULT_COUNT) ? canfdi_catalogue_fault[fault].dtc[0] : 0U;
+}
+
+/* Best candidate of component c and the best candidate that names another
+ * trouble code (model rules), into res: two rules of one code (speed-sensor
+ * gain and offset) do not compete, since the decision is which code. */
 static void rank(canfdi_diagnosis_t *d, uint32_t c)
 {
   canfdi_diagnosis_result_t *res = &d->res[c];
+  uint8_t pct_of[CANFDI_DIAG_N_RULES];
   uint32_t i;
   res->best = 0U;
   res->best_pct = 0U;
@@ -439,6 +501,7 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
   res->second_pct = 0U;
   for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
     const canfdi_diag_model_rule_t *r = &canfdi_diag_model_rules[i];
+    pct_of[i] = 0U;
     if (r->comp == c) {
       const rule_refs_t rr = refs_of(&d->rule[i], d->ref[c]);
       uint32_t pct = 0U;
@@ -451,18 +514,20 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
         cand = true;
       }
       if (cand) {
-        if ((res->best == 0U) || (pct > res->best_pct)) {
-          res->second = res->best;
-          res->second_pct = res->best_pct;
+        /* a candidate counts at least 1 % so that 0 marks "none" below */
+        pct_of[i] = (uint8_t)((pct > 0U) ? pct : 1U);
+        if ((res->best == 0U) || (pct_of[i] > res->best_pct)) {
           res->best = r->fault;
-          res->best_pct = (uint8_t)pct;
-        } else if ((res->second == 0U) || (pct > res->second_pct)) {
-          res->second = r->fault;
-          res->second_pct = (uint8_t)pct;
-        } else {
-          /* third or worse */
+          res->best_pct = pct_of[i];
         }
       }
+    }
+  }
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    const uint8_t f = canfdi_diag_model_rules[i].fault;
+    if ((pct_of[i] != 0U) && (code_of(f) != code_of(res->best)) && (pct_of[i] > res->second_pct)) {
+      res->second = f;
+      res->second_pct = pct_of[i];
     }
   }
 }
@@ -532,6 +597,7 @@ static void clear_result(canfdi_diagnosis_t *d, uint32_t c, uint8_t id, uint8_t 
   res->not_isolated = false;
   d->win_n[c] = 0U;
   d->win_id[c] = 0U;
+  d->latched[c] = false;
 }
 
 /* A hard rule fired in component c: the flagged fault breaks the models'
@@ -583,9 +649,16 @@ static void component_match(canfdi_diagnosis_t *d, uint32_t c, uint8_t prev_isol
     d->win_id[c] = winner;
     d->win_n[c] = (winner != 0U) ? 1U : 0U;
   }
-  if ((winner != 0U) && (d->win_n[c] >= d->cfg.isolate_steps)) {
+  if (d->latched[c] && (prev_isolated != 0U)) {
+    /* Latched: the fault isolated in this episode stays the one named while
+     * the component shows symptoms (its other model tests are inhibited:
+     * their assumptions include the failed part). */
+    res->isolated = prev_isolated;
+    res->confidence_pct = (res->best == prev_isolated) ? res->best_pct : res->confidence_pct;
+  } else if ((winner != 0U) && (d->win_n[c] >= d->cfg.isolate_steps)) {
     res->isolated = winner;
     res->confidence_pct = res->best_pct;
+    d->latched[c] = true;
     if (prev_isolated != winner) {
       canfdi_count_inc(&d->diag.isolations);
     }

@@ -40,9 +40,11 @@
  * Symptom channels (per component, 10 slots; normalised so that 1.0 is the
  * threshold):
  *   DC motor   0 r1  1 r2  2 r3  3 r4           (residual / band)
- *              4 R_A 5 Psi 6 J   7 M_c           (relative deviation / cfg
+ *              4 R_A 5 Psi 6 RAX 7 M_c           (relative deviation / cfg
  *                                                 threshold, + and - sides
  *                                                 separately)
+ *              6 RAX: the share of r1 that the R_A estimate explains
+ *                (canfdi_symptoms.h; derived, 1.0 = half)
  *              8 J/Psi: dev(J) - dev(Psi)        (derived; / cfg threshold)
  *              9 UAC: measured U_A - command     (detect/canfdi_actmon.h)
  *   throttle   0 CORR 1 ARM 2 POS1 3 POS2        (residual / band)
@@ -171,12 +173,12 @@
 
 #define CANFDI_DIAG_N_COMP 2U   /* [0] DC motor, [1] throttle */
 #define CANFDI_DIAG_N_CH 10U    /* symptom channels per component */
-#define CANFDI_DIAG_N_FLAGS 10U /* flag bits 0..9 of canfdi_symptoms_t.flags */
+#define CANFDI_DIAG_N_FLAGS 11U /* flag bits 0..10 of canfdi_symptoms_t.flags */
 
 /* DC-motor channel indices (0..3 are CANFDI_SYM_DCM_R1..R4). */
 #define CANFDI_DIAG_CH_DCM_RA 4U
 #define CANFDI_DIAG_CH_DCM_PSI 5U
-#define CANFDI_DIAG_CH_DCM_J 6U
+#define CANFDI_DIAG_CH_DCM_RAX 6U
 #define CANFDI_DIAG_CH_DCM_MC 7U
 #define CANFDI_DIAG_CH_DCM_JPSI 8U
 #define CANFDI_DIAG_CH_DCM_UAC 9U
@@ -195,6 +197,7 @@
 /*
  * Calibration (copied at init). Domain, else -CANFDI_EINVAL:
  * 0 < off <= on <= 16.0; 1.0 <= weight_cap <= 16.0; step counts 1..10000;
+ * par_fresh_updates 0..10000 (0: every parameter 0 counts at once);
  * conf_min 0..100; margin 0..100; every parameter threshold and jpsi in
  * [0.001, 10.0] (0.1 % .. 1000 %).
  */
@@ -217,6 +220,8 @@ typedef struct {
   int32_t thr_par_pos_q16[CANFDI_SYM_N_PAR];
   int32_t thr_par_neg_q16[CANFDI_SYM_N_PAR];
   int32_t jpsi_q16;       /* |dev(J) - dev(Psi)| at which J/Psi is +-1.0 */
+  uint16_t par_fresh_updates; /* estimator updates after a symptom before a
+                               * parameter channel's 0 counts as absence */
 } canfdi_diagnosis_cfg_t;
 
 /* Result per component. */
@@ -275,6 +280,10 @@ typedef struct {
   uint16_t obs_zero;
   int8_t ref[CANFDI_DIAG_N_COMP][2]; /* operating-point signs of this step */
   uint16_t win_n[CANFDI_DIAG_N_COMP]; /* consecutive wins of res.best */
+  bool latched[CANFDI_DIAG_N_COMP];   /* res.isolated came from the model rules */
+  uint16_t fresh[CANFDI_DIAG_N_COMP][2]; /* estimator updates (A, B) since the
+                                          * component's symptoms appeared,
+                                          * <= par_fresh_updates */
   uint8_t win_id[CANFDI_DIAG_N_COMP];
   bool corr_not_isolated;
   bool initialised;

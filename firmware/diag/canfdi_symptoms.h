@@ -54,11 +54,21 @@
 #define CANFDI_SYM_F_BRIDGE_B_DEAD (1UL << 7)
 #define CANFDI_SYM_F_THR_NOT_FOLLOWING (1UL << 8) /* position does not follow the command */
 #define CANFDI_SYM_F_THR_NO_CURRENT (1UL << 9)  /* voltage applied, no motor current */
-#define CANFDI_SYM_F_TPS1_INVALID (1UL << 10)   /* TPS1 input INVALID this step (never
+#define CANFDI_SYM_F_DCM_W_JUMP (1UL << 10)   /* the measured speed stepped by more
+                                               * than the drive's torque explains */
+#define CANFDI_SYM_F_TPS1_INVALID (1UL << 11)   /* TPS1 input INVALID this step (never
                                                  * received or lost): its range test
                                                  * cannot run */
-#define CANFDI_SYM_F_TPS2_INVALID (1UL << 11)
-#define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 12) /* dcm_ua_cmd_rn_q16 valid */
+#define CANFDI_SYM_F_TPS2_INVALID (1UL << 12)
+#define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 13) /* dcm_ua_cmd_rn_q16 valid */
+#define CANFDI_SYM_F_DCM_RAX_VALID (1UL << 14)    /* dcm_rax_q16 valid */
+
+/* Estimator updates (dcm_upd / thr_upd): A = the equation of R_A and Psi
+ * (DC motor: armature) or R and K (throttle: electrical); B = the equation
+ * of J and M_c (DC motor: mechanical) or spring and friction (throttle:
+ * mechanical and its fast test). */
+#define CANFDI_SYM_UPD_A 0x01U
+#define CANFDI_SYM_UPD_B 0x02U
 
 typedef struct {
   int32_t dcm_rn_q16[CANFDI_SYM_N_RES];
@@ -77,12 +87,29 @@ typedef struct {
   int8_t dcm_ref[2];      /* 'a': speed w, 'b': armature current I_A */
   int8_t thr_ref[2];      /* 'a': motor voltage command, 'b': motor current */
   /* Measured U_A minus the bridge command applied over the same interval,
-   * filtered, / its threshold (Q16.16, 1.0 = threshold; the actuator
-   * monitor UAC, detect/canfdi_actmon.h). It is the one signal that tells
-   * a U_A sensor offset from a speed-sensor offset: in the armature
-   * equation the two are the same term. Valid when
+   * filtered (the actuator monitor UAC, detect/canfdi_actmon.h), / its
+   * threshold (Q16.16, 1.0 = threshold) or, while the armature residual r1
+   * is beyond its band, / (|r1| / 2): 1.0 = the disagreement explains half
+   * of r1. It is the one signal that tells a U_A sensor offset (it explains
+   * all of r1) from a speed-sensor offset (none of it): in the armature
+   * equation the two are the same term; scaled by r1, a zero means "not the
+   * voltage sensor" as early as r1 sees either. Valid when
    * CANFDI_SYM_F_DCM_UA_CMD_VALID is set. */
   int32_t dcm_ua_cmd_rn_q16;
+  /* The share of the armature residual r1 that the resistance estimate
+   * explains, (R_A,est - R_A,model) I_A / r1, / 0.5 (Q16.16: 1.0 = half of
+   * r1 explained). An R_A change moves the estimate by what r1 shows (share
+   * ~1); a sensor offset or a flux change leaves R_A alone (share ~0): at one
+   * operating point r1 alone cannot tell them apart. 0 while r1 is in its
+   * band (nothing to explain). Valid (CANFDI_SYM_F_DCM_RAX_VALID) while the
+   * armature estimator has converged and is fed. */
+  int32_t dcm_rax_q16;
+  /* Which estimator applied an update in this step (CANFDI_SYM_UPD_*): the
+   * diagnosis counts them to know whether a parameter channel's zero
+   * carries evidence from after a symptom appeared (canfdi_diagnosis.h,
+   * freshness). */
+  uint8_t dcm_upd;
+  uint8_t thr_upd;
 } canfdi_symptoms_t;
 
 #endif /* CANFDI_SYMPTOMS_H */

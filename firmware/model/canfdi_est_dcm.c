@@ -19,7 +19,8 @@ void canfdi_est_dcm_default_cfg(canfdi_est_dcm_cfg_t *cfg)
   cfg->forget_q31 = CANFDI_Q31_RATIO(1, 100);
   cfg->p0_q16 = 100 * CANFDI_Q16_ONE;
   cfg->trace_max_q16 = 1000 * CANFDI_Q16_ONE;
-  cfg->excite_min_q16 = CANFDI_Q16_MILLI(1);
+  cfg->excite_min_q16 = CANFDI_Q16(2, 10000);
+  cfg->excite_min_mech_q16 = CANFDI_Q16(3, 10000);
   cfg->excite_shift = 6U;
   cfg->conv_updates = 400U;
   cfg->ra_nom_q16 = CANFDI_Q16_MILLI(1520);
@@ -79,6 +80,7 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
     rm.phi_shift[1] = CANFDI_EST_DCM_SHIFT_W;
     rm.phi_shift[2] = 0;
     rm.excite_mask = 0x3U; /* dw/dt and w; not the constant */
+    rm.excite_min_q16 = cfg->excite_min_mech_q16;
     if ((canfdi_svf_init(&e->svf_u, &cfg->svf) == CANFDI_OK) &&
         (canfdi_svf_init(&e->svf_i, &cfg->svf) == CANFDI_OK) &&
         (canfdi_svf_init(&e->svf_w, &cfg->svf) == CANFDI_OK) &&
@@ -133,9 +135,22 @@ void canfdi_est_dcm_set_load_offset(canfdi_est_dcm_t *e, int32_t dload_q16)
   e->dload_q16 = dload_q16;
 }
 
+void canfdi_est_dcm_boost(canfdi_est_dcm_t *e)
+{
+  CANFDI_ASSERT(e != NULL);
+  canfdi_rls_boost(&e->arm);
+  canfdi_rls_boost(&e->mech);
+}
+
+uint8_t canfdi_est_dcm_updated(const canfdi_est_dcm_t *e)
+{
+  return e->updated;
+}
+
 void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, int32_t w_q16)
 {
   CANFDI_ASSERT(e != NULL);
+  e->updated = 0U;
   if (!e->started) {
     canfdi_svf_reset(&e->svf_u, ua_q16);
     canfdi_svf_reset(&e->svf_i, ia_q16);
@@ -159,6 +174,7 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
       phi[1] = canfdi_svf_dy_q16(&e->svf_i);
       phi[2] = canfdi_svf_y_q16(&e->svf_w);
       if (canfdi_rls_update(&e->arm, phi, y)) {
+        e->updated |= CANFDI_EST_DCM_UPD_ARM;
         e->arm_since_reset += (e->arm_since_reset < UINT32_MAX) ? 1U : 0U;
         canfdi_count_inc(&e->diag.arm_updates);
       }
@@ -179,6 +195,7 @@ void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, in
           canfdi_div_s32_qn(canfdi_svf_y_q16(&e->svf_l), psi_for_mech_q16(e), 16U));
       phi[2] = CANFDI_Q16_ONE;
       if (canfdi_rls_update(&e->mech, phi, y)) {
+        e->updated |= CANFDI_EST_DCM_UPD_MECH;
         e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
         canfdi_count_inc(&e->diag.mech_updates);
       }

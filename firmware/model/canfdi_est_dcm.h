@@ -86,9 +86,12 @@ typedef struct {
   canfdi_q31_t forget_q31;  /* 1 - lambda, both RLS */
   int32_t p0_q16;           /* initial P diagonal (normalised units) */
   int32_t trace_max_q16;    /* trace bound (normalised units) */
-  int32_t excite_min_q16;   /* excitation gate: mean-square normalised deviation
-                             * of each of I_A and w (armature), dw/dt and w
-                             * (mechanical) */
+  int32_t excite_min_q16;   /* armature excitation gate: mean-square
+                             * normalised deviation of each of I_A and w */
+  int32_t excite_min_mech_q16; /* mechanical gate, on dw/dt and w: higher,
+                             * because dw/dt carries the differentiated speed
+                             * noise, whose errors-in-variables bias pulls J
+                             * toward 0 when noise alone passes the gate */
   uint8_t excite_shift;     /* excitation filter time constant, 2^k updates */
   uint32_t conv_updates;    /* updates until `converged` */
   /* nominal parameters: initial theta and the Psi used before convergence */
@@ -124,6 +127,7 @@ typedef struct {
   canfdi_rls_t arm;
   canfdi_rls_t mech;
   uint8_t phase;          /* step counter modulo decim, 0 .. decim - 1 */
+  uint8_t updated;        /* CANFDI_EST_DCM_UPD_* of the last step */
   bool has_run;           /* stepped at least once since init (reset keeps it) */
   bool started;           /* filters reset on the first sample */
   uint32_t arm_since_reset;  /* armature updates since init/reset (state of
@@ -137,9 +141,12 @@ typedef struct {
 /*
  * Defaults for Isermann's motor at 1 ms: SVF order 2 at 200 rad/s, decim 5
  * (200 Hz updates), lambda 0.99 (memory 0.5 s), p0 100, trace bound 1000,
- * excitation threshold 1e-3 on the less excited of I_A and w (i.e. both a
- * current swing of ~0.25 A rms and a speed swing of ~4 rad/s rms; sensor
- * noise alone gives ~1e-5), time constant 2^6 updates, converged after
+ * armature excitation threshold 2e-4 on the less excited of I_A and w (a
+ * speed swing of ~1.8 rad/s rms; sensor noise alone gives ~1e-5, so the
+ * gate opens within ~10 updates of a test signal of a few rad/s instead of
+ * ~70 with 1e-3), mechanical threshold 1e-3 on dw/dt and w (the speed
+ * noise differentiated by the SVF reaches ~1.5e-4), time constant 2^6
+ * updates, converged after
  * 400 updates (2 s), nominal parameters of docs/design.md with
  * M_c = 0.11 + 1.2 N m, no late-load hold (load_hold_steps 0).
  */
@@ -153,6 +160,17 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
 /* Back to the nominal parameters and P0; the filters restart on the next
  * sample. keep_theta: covariance reset only. Cannot fail. */
 void canfdi_est_dcm_reset(canfdi_est_dcm_t *e, bool keep_theta);
+
+/* Covariance boost of both RLS (canfdi_rls_boost): filters, estimates,
+ * convergence state and excitation measures kept. For a change the caller
+ * detected (the diagnosis' first symptom). Cannot fail. Cost: O(n^2). */
+void canfdi_est_dcm_boost(canfdi_est_dcm_t *e);
+
+/* Which RLS applied an update in the last step: bit 0 armature, bit 1
+ * mechanical (CANFDI_EST_DCM_UPD_*). O(1). */
+#define CANFDI_EST_DCM_UPD_ARM 0x01U
+#define CANFDI_EST_DCM_UPD_MECH 0x02U
+uint8_t canfdi_est_dcm_updated(const canfdi_est_dcm_t *e);
 
 /* The known load offset dM_L (Q16.16 N m, see the header) used from the
  * next step on until changed. Cannot fail. Cost: O(1).

@@ -262,6 +262,7 @@ static void est_thr_el_update(canfdi_est_thr_t *e)
     phi[2] = canfdi_svf_dy_q16(&e->svf_a);
     phi[3] = CANFDI_Q16_ONE;
     if (canfdi_rls_update(&e->el, phi, y)) {
+      e->updated |= CANFDI_EST_THR_UPD_EL;
       e->el_since_reset += (e->el_since_reset < UINT32_MAX) ? 1U : 0U;
       canfdi_count_inc(&e->diag.el_updates);
     }
@@ -289,15 +290,29 @@ static void est_thr_mech_update(canfdi_est_thr_t *e)
     phi[3] = CANFDI_Q16_ONE;
     phi[4] = canfdi_svf_y_q16(&e->svf_s);
     if (canfdi_rls_update(&e->mech, phi, canfdi_svf_y_q16(&e->svf_i))) {
+      e->updated |= CANFDI_EST_THR_UPD_MECH;
       e->mech_since_reset += (e->mech_since_reset < UINT32_MAX) ? 1U : 0U;
       canfdi_count_inc(&e->diag.mech_updates);
     }
   }
 }
 
+void canfdi_est_thr_boost(canfdi_est_thr_t *e)
+{
+  CANFDI_ASSERT(e != NULL);
+  canfdi_rls_boost(&e->el);
+  canfdi_rls_boost(&e->mech);
+}
+
+uint8_t canfdi_est_thr_updated(const canfdi_est_thr_t *e)
+{
+  return e->updated;
+}
+
 void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16)
 {
   CANFDI_ASSERT(e != NULL);
+  e->updated = 0U;
   if (!e->started) {
     canfdi_svf_reset(&e->svf_u, u_q16);
     canfdi_svf_reset(&e->svf_i, i_q16);

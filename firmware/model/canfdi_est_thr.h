@@ -184,6 +184,7 @@ typedef struct {
   canfdi_rls_t el;
   canfdi_rls_t mech;
   uint8_t phase;           /* step counter modulo decim, 0 .. decim - 1 */
+  uint8_t updated;        /* CANFDI_EST_THR_UPD_* of the last step */
   bool has_run;           /* stepped at least once since init (reset keeps it) */
   bool started;
   uint16_t since_clip;     /* steps since the last clipped current sample,
@@ -233,6 +234,17 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
 
 /* As canfdi_est_dcm_reset. Cannot fail. */
 void canfdi_est_thr_reset(canfdi_est_thr_t *e, bool keep_theta);
+
+/* Covariance boost of both RLS (canfdi_rls_boost); filters, estimates,
+ * convergence state and the fast test kept. For a change the caller
+ * detected (the diagnosis' first symptom). Cannot fail. Cost: O(n^2). */
+void canfdi_est_thr_boost(canfdi_est_thr_t *e);
+
+/* Which RLS applied an update in the last step: bit 0 electrical, bit 1
+ * mechanical and fast test (CANFDI_EST_THR_UPD_*). O(1). */
+#define CANFDI_EST_THR_UPD_EL 0x01U
+#define CANFDI_EST_THR_UPD_MECH 0x02U
+uint8_t canfdi_est_thr_updated(const canfdi_est_thr_t *e);
 
 /* One 1 ms step: motor voltage (V), current (A), angle (rad), Q16.16. */
 void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16);

@@ -274,6 +274,19 @@ void canfdi_rls_reset(canfdi_rls_t *r, bool keep_theta)
   canfdi_count_inc(&r->diag.resets);
 }
 
+void canfdi_rls_boost(canfdi_rls_t *r)
+{
+  unsigned i;
+  CANFDI_ASSERT(r != NULL);
+  for (i = 0U; i < NMAX; i++) {
+    r->d[i] = (i < r->cfg.n_params) ? xf_from_s32(r->cfg.p0_q16, 16) : xf_make(0, 0);
+  }
+  for (i = 0U; i < CANFDI_RLS_N_U; i++) {
+    r->u[i] = xf_make(0, 0);
+  }
+  canfdi_count_inc(&r->diag.boosts);
+}
+
 static bool rls_gated(const canfdi_rls_t *r, unsigned i)
 {
   return (r->cfg.excite_mask == 0U) || (((unsigned)r->cfg.excite_mask >> i) & 1U) != 0U;

@@ -128,6 +128,7 @@ typedef struct {
   uint32_t skipped;     /* updates skipped by the excitation gate */
   uint32_t trace_clips; /* times D was scaled down to the trace bound */
   uint32_t resets;      /* canfdi_rls_reset calls (init counts as none) */
+  uint32_t boosts;      /* canfdi_rls_boost calls */
   uint32_t saturations; /* d_j floored at 2^-60 */
 } canfdi_rls_diag_t;
 
@@ -166,6 +167,15 @@ int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg);
  * detected change). Re-primes the excitation measure. Cannot fail.
  */
 void canfdi_rls_reset(canfdi_rls_t *r, bool keep_theta);
+
+/*
+ * Covariance boost: P = p0 I, everything else kept (theta, the excitation
+ * measure and its gate decision). The reaction to a change that the
+ * caller detected while the signals are moving: the estimate becomes alert
+ * at once, without the excitation measure's re-priming delay of
+ * canfdi_rls_reset. Cannot fail. Cost: O(n^2) stores.
+ */
+void canfdi_rls_boost(canfdi_rls_t *r);
 
 /*
  * One sample: regressors phi_q16[0..n-1] and output y_q16, Q16.16 physical.

@@ -35,8 +35,14 @@ RULES_CSV = ROOT / "dbc" / "diag_rules.csv"
 FAULTS_CSV = ROOT / "dbc" / "faults.csv"
 TABLE = Path(os.environ.get("CANFDI_SYMPTOMS_JSON", ROOT / "build" / "bench" / "symptoms.json"))
 
-DCM_CH = ["r1", "r2", "r3", "r4", "est_dcm.R_A", "est_dcm.Psi", "est_dcm.J", "est_dcm.M_c",
+DCM_CH = ["r1", "r2", "r3", "r4", "est_dcm.R_A", "est_dcm.Psi", "RAX", "est_dcm.M_c",
           "JPSI", "command_vs_measured_ua"]
+# RAX, the share of r1 that the R_A estimate explains (canfdi_symptoms.h),
+# at the bench's operating point (its method: 100 rad/s, 1.2 N m load):
+# I_A = M_c / Psi = (0.11 + 1.2) N m / 0.33 V s = 3.97 A. The firmware's
+# channel is share / 0.5 with its hysteresis 0.8..1.0: '+' from a share of
+# 0.5, '0' below 0.4; 0 while r1 is in its band.
+BENCH_IA_A = 1.31 / 0.33
 # The spring and friction channels carry the fast structured test of
 # canfdi_est_thr (spring-torque and Coulomb-friction deviations, expressed in
 # the bench as P_nom (1 + a) and T_c,nom (1 + dev)), as the application does.
@@ -99,6 +105,15 @@ def measured(fault: dict, comp: str, thr: dict, jpsi: float) -> list[str]:
     for name in (DCM_CH if comp == "DCM" else THR_CH):
         if name is None:
             out.append("x")
+        elif name == "RAX":
+            r1 = out[0]
+            if r1 not in "+-":
+                out.append("0")
+                continue
+            d_r1 = cols["r1"]["mean_after"] - cols["r1"]["mean_before"]
+            d_ra = cols["est_dcm.R_A"]["mean_after"] - cols["est_dcm.R_A"]["mean_before"]
+            share = d_ra * BENCH_IA_A / d_r1
+            out.append("+" if share >= 0.5 else ("-" if share <= -0.5 else ("0" if abs(share) < 0.4 else "~")))
         elif name == "JPSI":
             d = _rel(cols["est_dcm.J"]) - _rel(cols["est_dcm.Psi"])
             out.append(_ternary(d, jpsi, jpsi))

@@ -746,6 +746,9 @@ int main(int argc, char **argv)
               y->thr_pdev_q16[0] / 65536.0, y->thr_pdev_q16[1] / 65536.0, y->thr_pdev_q16[2] / 65536.0,
               y->thr_pdev_q16[3] / 65536.0, y->thr_pdev_valid, (unsigned)y->flags);
       print_diag_symptoms(&app.diagnosis);
+      fprintf(stderr, "       test dcm %u/%u lack %u  thr %u/%u lack %u\n", (unsigned)app.test.dcm.phase,
+              (unsigned)app.test.dcm.reason, (unsigned)app.test.dcm.lack, (unsigned)app.test.thr.phase,
+              (unsigned)app.test.thr.reason, (unsigned)app.test.thr.lack);
     }
     if ((out != NULL) && ((k % decimate) == 0U)) {
       fprintf(out,

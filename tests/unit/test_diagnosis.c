@@ -105,7 +105,14 @@ static void build(canfdi_symptoms_t *s, const vec_t *v, double rn_noise, double 
   s->dcm_pdev_valid = 0x0FU;
   s->thr_pdev_valid = 0x0FU;
   s->dcm_ua_cmd_rn_q16 = Q16(v->uac + (rn_noise * noise()));
-  s->flags = v->flags;
+  s->flags = v->flags | CANFDI_SYM_F_DCM_RAX_VALID;
+  /* RAX, the share of r1 the R_A estimate explains / 0.5: ~1 / 0.5 for an
+   * R_A change, ~0 for every other fault (the bench table, RAX column of
+   * tests/dbc/test_diagnosis_rules.py) */
+  s->dcm_rax_q16 = Q16(((v->fault == CANFDI_FAULT_DCM_RA_UP) ? 2.0 : 0.0) + (rn_noise * noise()));
+  /* both estimators of both plants update every step */
+  s->dcm_upd = (uint8_t)(CANFDI_SYM_UPD_A | CANFDI_SYM_UPD_B);
+  s->thr_upd = (uint8_t)(CANFDI_SYM_UPD_A | CANFDI_SYM_UPD_B);
   /* the vectors are those of the forward-motoring operating point: speed,
    * current, throttle voltage and current all positive */
   s->dcm_ref[0] = 1;
@@ -198,8 +205,11 @@ START_TEST(test_isolates_each_fault)
                 canfdi_diagnosis_result(&dg, v->component)->second,
                 canfdi_diagnosis_result(&dg, v->component)->second_pct);
   /* latency: symptom persistence + decision persistence (model rules), or
-   * the flag persistence (hard rules) */
-  ck_assert_msg(first <= (uint32_t)(cfg.sym_on_steps + cfg.isolate_steps), "%s: first at %u", v->name, first);
+   * the flag persistence (hard rules); a rule that needs a parameter's
+   * zero also waits for par_fresh_updates estimator updates after the
+   * symptoms appeared (one per step here) */
+  ck_assert_msg(first <= (uint32_t)(cfg.sym_on_steps + cfg.par_fresh_updates + cfg.isolate_steps),
+                "%s: first at %u", v->name, first);
   ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << v->fault);
   ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, v->component, &conf), v->fault);
   ck_assert_uint_ge(conf, cfg.conf_min_pct);
@@ -398,21 +408,24 @@ typedef struct {
   const char *name;
   vec_t v;
   uint8_t component;
+  uint8_t upd; /* estimator updates per step (CANFDI_SYM_UPD_*) */
 } amb_t;
 
 static const amb_t ambiguous[] = {
     /* U_A or omega offset, no U_A-vs-command channel: the armature equation
      * cannot tell them apart */
-    {"ua_or_w_offset_no_uac", {"", 0, 0, {5, 0, 0, 4}, {0.004, 0.069, 0.069, 0.068}, {0}, {0}, 0, 0, 0}, DCM},
-    /* r1/r4 before the estimators moved: R_A up, U_A offset or omega offset */
-    {"r1_r4_only", {"", 0, 0, {3, 0, 0, 2.5}, {0, 0, 0, 0}, {0}, {0}, 0, 0, F_UAC}, DCM},
+    {"ua_or_w_offset_no_uac", {"", 0, 0, {5, 0, 0, 4}, {0.004, 0.069, 0.069, 0.068}, {0}, {0}, 0, 0, 0}, DCM, 3U},
+    /* r1/r4 before the estimators learnt from the new data (no update since
+     * the symptoms appeared): R_A up or omega offset; their unmoved
+     * estimates are no evidence */
+    {"r1_r4_only", {"", 0, 0, {3, 0, 0, 2.5}, {0, 0, 0, 0}, {0}, {0}, 0, 0, F_UAC}, DCM, 0U},
     /* TPS correlation with both position residuals out (slow drift with
      * frequent strokes, parity header): P2135 */
-    {"corr_both_pos", {"", 0, 0, {0}, {0}, {5, 0, 4, 4}, {0}, 0, 0, F_UAC}, THR},
+    {"corr_both_pos", {"", 0, 0, {0}, {0}, {5, 0, 4, 4}, {0}, 0, 0, F_UAC}, THR, 3U},
     /* correlation only, position residuals not valid */
-    {"corr_no_pos", {"", 0, 0, {0}, {0}, {5, 0, 0, 0}, {0}, 0, 0x03, F_UAC}, THR},
+    {"corr_no_pos", {"", 0, 0, {0}, {0}, {5, 0, 0, 0}, {0}, 0, 0x03, F_UAC}, THR, 3U},
     /* a residual pattern no fault of the catalogue produces (r2 alone) */
-    {"r2_alone", {"", 0, 0, {0, 3, 0, 0}, {0}, {0}, {0}, 0, 0, F_UAC}, DCM},
+    {"r2_alone", {"", 0, 0, {0, 3, 0, 0}, {0}, {0}, {0}, 0, 0, F_UAC}, DCM, 3U},
 };
 #define N_AMB (sizeof(ambiguous) / sizeof(ambiguous[0]))
 
@@ -425,6 +438,8 @@ START_TEST(test_not_isolated)
   setup();
   for (k = 0U; k < 1000U; k++) {
     build(&s, &a->v, 0.3, 0.002);
+    s.dcm_upd = a->upd;
+    s.thr_upd = a->upd;
     canfdi_diagnosis_step(&dg, &s, rep);
     ck_assert_msg(count_failed() == 0U, "%s: FAILED reported", a->name);
   }

@@ -4,12 +4,12 @@
 /* clang-format off */
 const canfdi_diag_model_rule_t canfdi_diag_model_rules[CANFDI_DIAG_N_RULES] = {
   {CANFDI_FAULT_DCM_RA_UP, CANFDI_DIAG_COMP_DCM, 0U, "+Z.+ PZ.. .0", "b..b .... .."}, /* R_A moves (estimator) with r1/r4 up; the mechanical equation untouched */
-  {CANFDI_FAULT_DCM_FLUX_DOWN, CANFDI_DIAG_COMP_DCM, 0U, "N++- 0N.. P0", "abba .... .."}, /* r1 Psi and J/Psi necessary; r2..r4 only support (load tracking pulls them back within seconds) */
+  {CANFDI_FAULT_DCM_FLUX_DOWN, CANFDI_DIAG_COMP_DCM, 0U, "N++- 0N0. P0", "abba .... .."}, /* r1 Psi and J/Psi necessary; r2..r4 only support (load tracking pulls them back within seconds) */
   {CANFDI_FAULT_DCM_FRICTION_UP, CANFDI_DIAG_COMP_DCM, 0U, "ZPP+ 00.+ .0", ".aaa .... .."}, /* r2 r3 up with a clear zero r1 (the armature equation is untouched by friction) */
   {CANFDI_FAULT_DCM_IA_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "NPPZ .... 00", ".... .... .."}, /* r4 (no I_A) stays zero; r1 r2 r3 see the offset */
-  {CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN, CANFDI_DIAG_COMP_DCM, 1U, "N.Z- 0-.. N0", "a..a .... .."}, /* r1 and J/Psi necessary: a real gain unbalances the armature equation */
-  {CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "-ZZ- 0N.. ZZ", ".... .a.. .."}, /* Psi moves with R_A and J/Psi still; UAC zero tells it from a U_A offset */
-  {CANFDI_FAULT_DCM_UA_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "+Z0+ 0+.. 0P", ".... .a.. .."}, /* UAC (measured U_A against the command) necessary */
+  {CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN, CANFDI_DIAG_COMP_DCM, 1U, "N.Z- 0-0. N0", "a..a .... .."}, /* r1 and J/Psi necessary: a real gain unbalances the armature equation */
+  {CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "NZZ- 0.Z. 0Z", ".... .... .."}, /* r1 necessary and constant in sign (not following the speed); RAX zero: the R_A estimate does not explain r1; UAC zero tells it from a U_A offset; J/Psi only supports (an abrupt offset kicks it) */
+  {CANFDI_FAULT_DCM_UA_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "+Z0+ 0+0. 0P", ".... .a.. .."}, /* UAC (measured U_A against the command) necessary */
   {CANFDI_FAULT_THR_TPS1_DRIFT, CANFDI_DIAG_COMP_THR, 1U, "PZPZ .... ..", ".... .... .."}, /* CORR and POS1 necessary; POS2 zero */
   {CANFDI_FAULT_THR_TPS2_DRIFT, CANFDI_DIAG_COMP_THR, 1U, "PZZN .... ..", ".... .... .."}, /* CORR and POS2 necessary; POS1 zero */
   {CANFDI_FAULT_THR_SPRING_WEAK, CANFDI_DIAG_COMP_THR, 0U, "ZZ.. 0ZNZ ..", ".... .... .."}, /* spring torque deviation of the fast test necessary; K zero */
@@ -40,6 +40,8 @@ const canfdi_diag_hard_rule_t canfdi_diag_hard_rules[CANFDI_DIAG_N_HARD_RULES] =
    (uint16_t)(CANFDI_SYM_F_TPS1_OUTLIER), 0U}, /* isolated by the 2-out-of-3 vote */
   {CANFDI_FAULT_THR_MOTOR_OPEN, CANFDI_DIAG_COMP_THR, (uint16_t)(CANFDI_SYM_F_THR_NO_CURRENT),
    (uint16_t)(0U), 0U}, /* voltage applied and no motor current */
+  {CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, (uint16_t)(CANFDI_SYM_F_DCM_W_JUMP),
+   (uint16_t)(0U), 0U}, /* a step of the measured speed that the drive's torque cannot give: an abrupt speed-sensor offset or gain (one code) */
   {CANFDI_FAULT_THR_JAMMED, CANFDI_DIAG_COMP_THR, (uint16_t)(CANFDI_SYM_F_THR_NOT_FOLLOWING),
    (uint16_t)(CANFDI_SYM_F_THR_NO_CURRENT), 0U}, /* the valve does not follow its reference while it draws current */
 };

@@ -15,7 +15,7 @@
 #define CANFDI_DIAG_COMP_THR 1U
 
 #define CANFDI_DIAG_N_RULES 14U      /* model rules */
-#define CANFDI_DIAG_N_HARD_RULES 11U /* hard rules */
+#define CANFDI_DIAG_N_HARD_RULES 12U /* hard rules */
 #define CANFDI_DIAG_PATTERN_LEN 13U
 
 /* Pattern: one character per channel, spaces ignored: '+' '-' '0'

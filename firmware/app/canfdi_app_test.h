@@ -1,0 +1,65 @@
+/*
+ * canfdi_app_test.h — the product's enabling conditions for the intrusive
+ * test signals: one scheduler per plant (diag/canfdi_testsched.h) decides
+ * when the excitation (ctrl/canfdi_excite.h) is on; this module says when
+ * a plant may carry it and feeds the schedulers each step.
+ *
+ * Enabling conditions (all of them, per plant):
+ *   DC motor: the drive runs in closed loop (controller RUN) in NORMAL
+ *             degradation, with a usable speed reference whose magnitude
+ *             lies in [dcm_w_min, dcm_w_max]: never at standstill (the
+ *             driver expects the motor to stand still) and never where the
+ *             test signal would push the speed past the calibrated range.
+ *   Throttle: the valve runs in closed loop in NORMAL degradation with a
+ *             usable angle reference in [thr_min, thr_max]: away from the
+ *             limp-home band (the spring's kink) and from the stops.
+ * Need: the plant's diagnosis shows a symptom it has not isolated yet (the
+ * last step's result: the diagnosis runs after the controllers).
+ * Excited: the plant's estimator was fed this step and its excitation gate
+ * applied the last update.
+ *
+ * Cost: two scheduler steps and a few compares per step, O(1).
+ */
+#ifndef CANFDI_APP_TEST_H
+#define CANFDI_APP_TEST_H
+
+#include "core/canfdi_common.h"
+#include "diag/canfdi_testsched.h"
+
+typedef struct {
+  canfdi_testsched_cfg_t dcm;
+  canfdi_testsched_cfg_t thr;
+  int32_t dcm_w_min_rad_s_q16; /* |speed reference| window, Q16.16 rad/s */
+  int32_t dcm_w_max_rad_s_q16;
+  int32_t thr_min_rad_q16;     /* angle reference window, Q16.16 rad */
+  int32_t thr_max_rad_q16;
+} canfdi_app_test_cfg_t;
+
+typedef struct {
+  bool ref_usable;   /* the driver's reference was received and is usable */
+  int32_t ref_q16;   /* speed (rad/s) or angle (rad) reference */
+  bool closed_loop;  /* controller RUN in NORMAL degradation */
+  bool excited;      /* estimator fed and its last update applied */
+  bool need;         /* detected, not isolated (last step) */
+  bool unlearnt;     /* the estimator is fed but has not converged */
+} canfdi_app_test_in_t;
+
+typedef struct {
+  canfdi_testsched_t dcm;
+  canfdi_testsched_t thr;
+} canfdi_app_test_t;
+
+/* Defaults: the schedulers' defaults; DC motor 20..350 rad/s; throttle
+ * 10..80 deg (above the limp-home angle of 6.5 deg and its band, below the
+ * upper stop at 90 deg with room for the test signal). */
+void canfdi_app_test_default_cfg(canfdi_app_test_cfg_t *cfg);
+
+/* CANFDI_OK or -CANFDI_EINVAL (NULL, an empty window, a scheduler cfg
+ * refused). */
+int32_t canfdi_app_test_init(canfdi_app_test_t *t, const canfdi_app_test_cfg_t *cfg);
+
+/* One step of both schedulers; *dcm_on / *thr_on: the test signal is on. */
+void canfdi_app_test_step(canfdi_app_test_t *t, const canfdi_app_test_cfg_t *cfg, const canfdi_app_test_in_t *dcm,
+                          const canfdi_app_test_in_t *thr, bool *dcm_on, bool *thr_on);
+
+#endif /* CANFDI_APP_TEST_H */
