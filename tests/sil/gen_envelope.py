@@ -183,20 +183,21 @@ def thr_series(lines, dur, t_jam_starts=()):
     """Quantities of a throttle point at every DT: the reference (setpoint
     clamped to the controller's range plus the ECU's +-3 deg 2 Hz
     excitation), the valve following it at most at the physical slew rate of
-    the supply, and `track` for a valve stuck at each time in t_jam_starts."""
+    the supply, and `stuck_err` for a valve stuck at each time in t_jam_starts."""
     sp = profile(lines, "angle", dur)
     supply = param(lines, "thr_supply_V", op.P["thr_supply_V"])
     slew = math.degrees(op.thr_slew_max(supply)) * DT
     amp = math.degrees(op.fw("thr_sine"))
     per = op.fw("thr_sine_period")
     lo, hi = op.fw("thr_angle_min_deg"), op.fw("thr_angle_max_deg")
-    tau = op.fw("track_tau")
+    win = int(round(per / DT))
+    errs = []
     lh = op.P["thr_limp_home_deg"]
     band = op.fw("thr_limp_band_deg")
     mem = int(round(op.fw("thr_fast_memory") / DT))
     hold = op.fw("thr_holdoff")
     out, th = [], None
-    jam, trk = None, 0.0
+    jam = None
     starts = sorted(t_jam_starts)
     mv, mva = [], []
     for k in range(int(round(dur / DT)) + 1):
@@ -218,11 +219,10 @@ def thr_series(lines, dur, t_jam_starts=()):
         q["moving"] = 1 if sum(mv[-mem:]) * DT >= hold - 1e-9 else 0
         q["moving_away"] = 1 if sum(mva[-mem:]) * DT >= hold - 1e-9 else 0
         if starts and t >= starts[0] - 1e-9:
-            jam, trk = (th if prev is None else prev), 0.0
+            jam = th if prev is None else prev
             starts.pop(0)
-        if jam is not None:
-            trk += (abs(math.radians(ref - jam)) - trk) * DT / tau
-        q["track"] = trk
+        errs.append(0.0 if jam is None else abs(math.radians(ref - jam)))
+        q["stuck_err"] = max(errs[-win:])
         out.append((t, q))
     return out
 
@@ -336,6 +336,11 @@ def build_run(row, mode, sub, pname, obs_row, dtcs, seed):
         NOISE,
     ]
     lines += [ln.format(dur=f"{dur:g}") for ln in dcm_lines + thr_lines]
+    if sub == "thr" and not point.get("nominal"):
+        # the valve starts where the point holds it (not at limp-home), so
+        # the lead-in has no full-travel stroke of its own
+        th0 = max(0.0, min(90.0, profile(thr_lines, "angle", dur)(0.0)))
+        lines.insert(lines.index(NOISE) + 1, f"init thr_angle {th0:g}")
     lines.append(fault)
     if klass == "isolable":
         lines.append(f"expect {T0 - 0.001:.3f} no_dtc")

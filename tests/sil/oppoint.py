@@ -45,6 +45,10 @@ FW = {
     "dcm_ia_max": (20.0, "firmware/ctrl/canfdi_ctrl_dcm.c", "current limit of the speed loop"),
     "dcm_speed_max": (350.0, "firmware/ctrl/canfdi_ctrl_dcm.c", "speed setpoint limit"),
     "dcm_prbs": (5.0, "firmware/app/canfdi_app_cal.c", "PRBS speed excitation amplitude"),
+    "dcm_prbs_bit": (0.05, "firmware/app/canfdi_app_cal.c", "PRBS bit period, s"),
+    "dcm_speed_bw": (100.0, "firmware/ctrl/canfdi_ctrl_dcm.h", "speed loop bandwidth w_cw, rad/s"),
+    "dcm_speed_kp": (0.582, "firmware/ctrl/canfdi_ctrl_dcm.c", "speed PI kp = J w_cw / Psi, A/(rad/s)"),
+    "dcm_cur_kp": (3.41, "firmware/ctrl/canfdi_ctrl_dcm.c", "current PI kp = L w_ci, V/A"),
     "thr_sine": (0.052, "firmware/app/canfdi_app_cal.c", "angle excitation amplitude, rad"),
     "thr_sine_period": (0.5, "firmware/app/canfdi_app_cal.c", "angle excitation period, s"),
     "r1_band": (0.08, "firmware/model/canfdi_parity_dcm.c", "r1 base band, V"),
@@ -142,12 +146,34 @@ def dcm_point(w, load, supply=None, ra=RA_WARM, p=P):
         i_a = (mf0 * math.copysign(1.0, w) + mf1 * w + load) / psi
     u_a = ra * i_a + psi * w
     u_lim = min(supply, fw("dcm_u_max"))
+    i_exc = dcm_excitation_current(p)
     return dict(w=w, M_L=load, I=i_a, U=u_a, supply=supply, u_lim=u_lim,
+                I_rms=math.hypot(i_a, i_exc), U_exc=dcm_excitation_command(ra),
                 sat=abs(u_a) >= u_lim,
                 uac=abs(u_a) < supply - fw("uac_headroom"),
                 P_el=u_a * i_a, P_mech=psi * i_a * w,
                 quadrant=("standstill" if w == 0.0 else
                           ("motoring" if i_a * w > 0 else "braking")))
+
+
+def dcm_excitation_current(p=P):
+    """RMS armature current of the ECU's PRBS speed excitation alone: each
+    edge steps the speed reference by 2a; the speed loop (bandwidth w_cw,
+    tau = 1/w_cw) accelerates the rotor with the current
+    (J/Psi) (2a/tau) e^(-t/tau), whose square integrates to
+    (J 2a / (Psi tau))^2 tau / 2; an edge comes with every other bit on
+    average (bit period Tb): mean i^2 = (J 2a / (Psi tau))^2 tau / (4 Tb)."""
+    a, tb, tau = fw("dcm_prbs"), fw("dcm_prbs_bit"), 1.0 / fw("dcm_speed_bw")
+    peak = p["dcm_j_kgm2"] * 2 * a / (p["dcm_psi_Vs"] * tau)
+    return peak * math.sqrt(tau / (4 * tb))
+
+
+def dcm_excitation_command(ra=RA_WARM):
+    """Armature command at a PRBS edge on top of the operating point: the
+    speed PI steps the current reference by kp_w 2a, the current PI answers
+    with kp_i times that plus the feed-forward R i_ref."""
+    di = fw("dcm_speed_kp") * 2 * fw("dcm_prbs")
+    return (fw("dcm_cur_kp") + ra) * di
 
 
 def dcm_speed_max(load, supply=None, p=P, ra=RA_WARM):
@@ -217,6 +243,8 @@ FUNCS = {"abs": abs, "min": min, "max": max}
 VARS = {
     "w": "DC-motor true speed, rad/s",
     "I": "armature current, A (steady state)",
+    "I_rms": "RMS armature current with the ECU's PRBS excitation, A",
+    "U_exc": "armature command step of a PRBS edge, V",
     "U": "armature voltage, V (steady state)",
     "M_L": "load torque, N m",
     "uac": "1 while the U_A-command channel is judged: |U| < supply - 2 V",
@@ -229,7 +257,7 @@ VARS = {
     "i": "throttle motor current that balances the spring, A",
     "tps1": "TPS1 true voltage, V",
     "tps2": "TPS2 true voltage, V",
-    "track": "low-passed |reference - angle at the fault start| (a valve stuck there), rad",
+    "stuck_err": "largest |reference - angle at the fault start| over the last 0.5 s (a valve stuck there), rad",
     "always": "1",
 }
 
@@ -330,7 +358,7 @@ def main(argv=None):
         q = thr_point(a.angle, a.speed, a.supply)
         print(_fmt(q))
         q.update(moving=1, moving_away=1 if abs(a.angle - P["thr_limp_home_deg"]) >= fw("thr_limp_band_deg") else 0,
-                 th_sp=a.angle, track=0.0)
+                 th_sp=a.angle, stuck_err=fw("thr_sine"))
         rows = load_observability()
         for name, r in rows.items():
             if name.startswith("thr_"):
@@ -362,6 +390,8 @@ def limits():
         "winding at continuous current [C]": t_cont,
         "continuous load at 20 rad/s [N m]": psi * i_cont - mf0 - mf1 * 20.0,
         "peak torque at ia_max [N m]": psi * fw("dcm_ia_max"),
+        "PRBS excitation current RMS [A]": dcm_excitation_current(),
+        "PRBS edge command step [V]": dcm_excitation_command(),
         "speed max, no load, 48 V limit [rad/s]": dcm_speed_max(0.0),
         "speed max, 1.2 N m, 48 V [rad/s]": dcm_speed_max(1.2),
         "speed max, 0.6 N m, 48 V [rad/s]": dcm_speed_max(0.6),
