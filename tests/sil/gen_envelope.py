@@ -125,7 +125,20 @@ COMM_POINTS = {"dcm": ["fwd_motor", "rev_brake"], "thr": ["mid", "wide_open"]}
 
 # Sampled-set scenarios the firmware does not meet yet: key -> one line of
 # reason (observed on the current firmware).
-PENDING: dict[str, str] = {}
+PENDING: dict[str, str] = {
+    "dcm_ia_sensor_offset_abrupt_low_speed_high_load":
+        "P1A20 named, then P1A21 (speed sensor) 2.4 s after the fault at 20 rad/s, 6.7 A (3 seeds)",
+    "thr_friction_up_abrupt_tip_in":
+        "the 10 -> 80 deg tip-in trips the jam monitor (P2119 29 ms after the step, thr fail_safe): "
+        "P0638 is never tested",
+    "thr_motor_r_up_abrupt_tip_out":
+        "the 80 -> 10 deg tip-out trips the jam monitor (P2119 29 ms after the step, thr fail_safe): "
+        "P2101 is never tested",
+    "thr_tps1_open_abrupt_tip_in":
+        "P0122 at 9 ms, and the tip-in step trips the jam monitor: P2119 29 ms after it",
+    "thr_tps1_short_abrupt_tip_out":
+        "P0123 at 9 ms, and the tip-out step trips the jam monitor: P2119 29 ms after it",
+}
 
 
 # ---------------------------------------------------------------------------
@@ -266,12 +279,16 @@ def classify(row, series, intervals, budget):
 
 
 def tolerated_codes(row, series, intervals):
-    codes = set()
-    for code, cond in row["tolerated_codes"]:
+    """Tolerated codes whose condition holds at some instant while the fault
+    is on, and those of them that are conditional (not `always`)."""
+    codes, cond_codes = set(), set()
+    for code, cond, text in row["tolerated_codes"]:
         for a, b in intervals:
             if any(a - 1e-9 <= t < b and op.evaluate(cond, q) for t, q in series):
                 codes.add(code)
-    return sorted(codes)
+                if text != "always":
+                    cond_codes.add(code)
+    return sorted(codes), sorted(cond_codes)
 
 
 def read_catalogue():
@@ -318,7 +335,7 @@ def build_run(row, mode, sub, pname, obs_row, dtcs, seed):
               else thr_series(thr_lines, dur, [a for a, _ in iv]))
     klass = classify(obs_row, series, iv, budget)
     codes = row["dtc"].split("+") + gm.EXTRA_DTCS.get(name, ([], ""))[0]
-    tol = tolerated_codes(obs_row, series, iv)
+    tol, tol_cond = tolerated_codes(obs_row, series, iv)
     for c in codes + tol:
         if c not in dtcs:
             raise SystemExit(f"gen_envelope: {c} ({name}) not in dbc/dtcs.csv")
@@ -351,7 +368,7 @@ def build_run(row, mode, sub, pname, obs_row, dtcs, seed):
         lines.append(f"expect {T0 - 0.001:.3f} no_dtc")
     return dict(key=key, fault=name, fault_id=int(row["id"]), mode=mode, sub=sub, point=pname,
                 nominal=bool(point.get("nominal")), cls=cls, budget=budget, due=due,
-                klass=klass, codes=codes, tolerated=tol, dur=dur,
+                klass=klass, codes=codes, tolerated=tol, tolerated_cond=tol_cond, dur=dur,
                 text="\n".join(lines) + "\n", file=f"{name}_{mode}_{pname}.scn")
 
 
@@ -382,7 +399,9 @@ def sampled(faults, dtcs, obs):
     for row in faults:
         sub, pts = points_for(row)
         cands = [build_run(row, "abrupt", sub, p, obs[row["name"]], dtcs, 0) for p in pts]
-        iso = [c for c in cands if c["klass"] == "isolable" and not c["nominal"]]
+        # a conditional tolerated code (a drifted TPS leaving its range) is
+        # fine but cannot be written as an expectation: not sampled there
+        iso = [c for c in cands if c["klass"] == "isolable" and not c["nominal"] and not c["tolerated_cond"]]
         blind = [c for c in cands if c["klass"] == "not_observable"]
         pick = []
         if iso:

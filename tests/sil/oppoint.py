@@ -308,7 +308,8 @@ def load_observability(path=OBS_CSV, faults=None):
                 code, _, cond = part.partition(" if ")
                 if not re.fullmatch(r"[PCBU][0-9A-F]{4}", code.strip()):
                     raise ExprError(f"{where}: tolerated entry {part!r} is not 'CODE [if EXPR]'")
-                tol.append((code.strip(), compile_expr(cond or "always", where + " tolerated")))
+                cond = cond.strip() or "always"
+                tol.append((code.strip(), compile_expr(cond, where + " tolerated"), cond))
             r["tolerated_codes"] = tol
             rows[r["fault"]] = r
     if faults is not None:
