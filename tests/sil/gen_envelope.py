@@ -650,11 +650,13 @@ def main():
         description="The envelope fault matrix (docs/envelope.md): writes the sampled make-test "
                     "scenarios (default), prints the grid (--grid), or runs the whole matrix as a "
                     "bench (--bench BIN).",
-        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n", 2)[1])
+        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n", 1)[1])
     ap.add_argument("--grid", action="store_true", help="print each point's steady state and classes")
     ap.add_argument("--bench", metavar="BIN", help="run the full matrix with this canfdi-sil")
-    ap.add_argument("--out", type=Path, default=ROOT / "build" / "bench" / "envelope.json")
-    ap.add_argument("--png", type=Path, default=ROOT / "build" / "bench" / "envelope_confusion.png")
+    ap.add_argument("--out", type=Path, default=ROOT / "build" / "bench" / "envelope.json",
+                    help="the bench's JSON: every run, the confusion matrix, the summary")
+    ap.add_argument("--png", type=Path, default=ROOT / "build" / "bench" / "envelope_confusion.png",
+                    help="the confusion matrix as a picture")
     ap.add_argument("--scn-dir", type=Path, default=ROOT / "build" / "bench" / "envelope_scn",
                     help="where the bench writes its scenarios (kept to reproduce a run)")
     ap.add_argument("--jobs", type=int, default=2, help="parallel runner processes (default 2)")
@@ -663,7 +665,10 @@ def main():
     a = ap.parse_args()
     if a.jobs < 1 or a.seeds < 1:
         ap.error("--jobs and --seeds must be at least 1")
-    faults, dtcs, obs = read_catalogue()
+    try:
+        faults, dtcs, obs = read_catalogue()
+    except (op.ExprError, KeyError, ValueError) as e:
+        ap.error(str(e))
     if a.grid:
         print_grid(faults, dtcs, obs)
         return 0
