@@ -253,6 +253,14 @@ def test_verdicts(run, events, verdict):
     assert ge.judge(run, _tl(*events))["verdict"] == verdict
 
 
+def test_fault_free_run_names_nothing():
+    r = ge.fault_free_run("thr", "tip_in", 1)
+    assert not any(ln.startswith("fault ") for ln in r["text"].splitlines())
+    assert r["text"].rstrip().endswith("no_dtc")
+    assert ge.judge(r, _tl())["verdict"] == "correct"
+    assert ge.judge(r, _tl((3.03, "P2119", "confirmed")))["verdict"] == "false_alarm"
+
+
 def test_delay_and_late():
     j = ge.judge(_run(due=3.1), _tl((3.25, "P1A10", "testFailed")))
     assert j["delay_s"] == pytest.approx(0.25) and j["late"]
