@@ -42,6 +42,8 @@ Tests (`make test` runs those marked *)
   make sil-matrix         * every catalogue fault in every mode (tests/sil/matrix)
   make sil-pending          the scenarios that do not pass yet (tests/sil/pending)
   make sil-matrix-pending   the matrix scenarios that do not pass yet
+  make sil-envelope       * faults away from the nominal point (tests/sil/envelope), oppoint checks
+  make sil-envelope-pending the envelope scenarios that do not pass yet
   make sil-long             hours of simulated time, -O2 build (tests/sil/long)
   make tools-test         * pytest tests/tools: canfdi-inject, -watch, -scenario, -plot
   make vcan-test          * the vcan sandbox's self-test (tools/vcan-run)
@@ -54,6 +56,7 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make bench-symptoms       the measured fault-symptom table
   make bench-longrun        10 fault-free simulated hours: residuals against their bands
   make bench-detection      detection delay, isolation, false alarms, smallest detected change
+  make bench-envelope       every fault x mode at every envelope point: verdicts, confusion matrix
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
   make sil-pil              instructions per step on QEMU (Cortex-M4/M0+ code), frames vs SIL
