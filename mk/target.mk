@@ -44,7 +44,7 @@ $(BUILD)/target/$(1)/obj/%.o: %.c
 	@mkdir -p $$(@D)
 	$(ARM_CC) $(TGT_ARCH_$(1)) $(TGT_CFLAGS) -MMD -MP -c $$< -o $$@
 
-$(BUILD)/target/$(1)/canfdi.elf: $(call tgt_fw_obj,$(1)) $(BUILD)/target/$(1)/obj/$(TGT_MAIN:.c=.o) $(TGT_LDSCRIPT) $(TGT_SRCLIST)
+$(BUILD)/target/$(1)/canfdi.elf: $(call tgt_fw_obj,$(1)) $(BUILD)/target/$(1)/obj/$(TGT_MAIN:.c=.o) $(TGT_LDSCRIPTS) $(TGT_SRCLIST)
 	$(ARM_CC) $(TGT_ARCH_$(1)) $(TGT_LDFLAGS) -Wl,-Map,$$(@:.elf=.map) -o $$@ $$(filter %.o,$$^)
 	@printf '%s\n' $(call tgt_fw_obj,$(1)) > $$@.objs
 endef
