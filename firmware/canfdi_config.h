@@ -20,9 +20,10 @@
 #define CANFDI_CFG_STEP_US 1000U
 #endif
 
-/* Largest number of parameters of one estimator. RAM cost per RLS instance
- * ~ 4 n^2 + 60 n + 80 bytes (432 bytes at 6; see model/canfdi_rls.h); 5 covers the
- * throttle's mechanical equation, 6 leaves one spare. */
+/* Largest number of parameters of one estimator, 1..7. RAM cost per RLS
+ * instance ~ 2 n^2 + 48 n + 64 bytes (360 bytes at 6; see
+ * model/canfdi_rls.h); 5 covers the throttle's mechanical equation, 6
+ * leaves one spare. */
 #ifndef CANFDI_CFG_RLS_MAX_PARAMS
 #define CANFDI_CFG_RLS_MAX_PARAMS 6U
 #endif

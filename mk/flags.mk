@@ -13,8 +13,9 @@
 #   release        REL_CFLAGS            benches, sil-long, canfdi-ecu-rel,
 #                                        the signal demo ($(BUILD)/rel)
 #   release+UBSan  REL_UBSAN_CFLAGS      canfdi-sim for the vcan sandbox
-#   Cortex-M       TGT_ARCH_<core>       `make firmware`, PIL (sil-pil)
-#                  TGT_CFLAGS, TGT_LDFLAGS, PIL_LDFLAGS
+#   Cortex-M       TGT_ARCH_<core>       `make firmware`, PIL (pil-test,
+#                  TGT_CFLAGS, TGT_LDFLAGS,  bench-pil)
+#                  PIL_LDFLAGS
 #   C++ reference  REF_CXXFLAGS          tests/ref (Eigen)
 #
 # Per-source flags: SRC_CFLAGS_<source path> (e.g. the libc feature macros
@@ -71,13 +72,25 @@ CHECK_I386_DIR := .deps/check-i386
 HOST_M32_LDFLAGS := -m32 -L$(CHECK_I386_DIR)
 
 # Cortex-M: the M4 is treated as the no-FPU variant (soft-float ABI, no VFP
-# code); the M0+ (ARMv6-M) has no hardware divide and no 32x32->64 multiply.
+# code); the M0/M0+ (ARMv6-M) have no hardware divide and no 32x32->64
+# multiply. The M3 and M0 are the PIL rig's cores (tests/pil); the M4F with
+# its FPU builds only the textbook floating-point RLS the RLS bench compares
+# with (bench/bench_rls_pil.c), never firmware.
 TGT_ABI := -mthumb -mfloat-abi=soft
 TGT_ARCH_cortex-m4 := -mcpu=cortex-m4 $(TGT_ABI)
+TGT_ARCH_cortex-m3 := -mcpu=cortex-m3 $(TGT_ABI)
+TGT_ARCH_cortex-m0 := -mcpu=cortex-m0 $(TGT_ABI)
 TGT_ARCH_cortex-m0plus := -mcpu=cortex-m0plus $(TGT_ABI)
+TGT_ARCH_cortex-m4f := -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard
 TGT_CFLAGS := $(WARN_C) -Os -g -ffunction-sections -fdata-sections $(FW_INC) -I$(BUILD)/target
-TGT_LDSCRIPT := firmware/port/cortexm/canfdi_cortexm.ld
-TGT_LINK := -nostartfiles -Wl,--gc-sections -Wl,-T,$(TGT_LDSCRIPT)
+# Linker scripts: one per board (MEMORY and stack), sharing the section
+# layout through INCLUDE, found on -L.
+TGT_LDDIR := firmware/port/cortexm
+TGT_LDSCRIPT := $(TGT_LDDIR)/canfdi_cortexm.ld
+TGT_LDSCRIPT_NRF51 := $(TGT_LDDIR)/canfdi_nrf51.ld
+TGT_LDSCRIPTS := $(TGT_LDSCRIPT) $(TGT_LDSCRIPT_NRF51) $(TGT_LDDIR)/canfdi_sections.ld
+tgt_link = -nostartfiles -Wl,--gc-sections -Wl,-L,$(TGT_LDDIR) -Wl,-T,$(1)
+TGT_LINK := $(call tgt_link,$(TGT_LDSCRIPT))
 # The firmware images: newlib-nano, no system calls (a stray malloc links).
 TGT_LDFLAGS := --specs=nano.specs --specs=nosys.specs $(TGT_LINK)
 # PIL on QEMU: semihosting (rdimon) reads the bus log; a harness, not firmware.

@@ -32,6 +32,8 @@ Tests (`make test` runs those marked *)
   make help-test          * this list against README.md and the Makefile; make format
   make ref-test           * fixed-point modules against their double-precision Eigen references
   make firmware-guard     * the checks of `make firmware` on the Cortex-M images
+  make pil-test           * PIL on QEMU (Cortex-M3, M4, M0): ECU frames bit for bit vs SIL, instructions per step
+  make footprint          * flash/RAM per module and worst-case stack of the application image
   make firmware-guard-negative * the guard rejects injected defects (double, float, malloc, dead code)
   make dbc-check          * the committed generated codecs and tables match dbc/
   make dbc-test           * pytest tests/dbc: the CAN database, codecs, E2E, catalogue
@@ -50,7 +52,7 @@ Tests (`make test` runs those marked *)
   make hil-test           * the HIL tests inside the sandbox (tests/hil, vcan tests of tests/sim)
 
 Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figure)
-  make bench                all of the following except sil-pil
+  make bench                all of the following
   make bench-foundation     detector cost (host instructions) and Cortex-M code size per module
   make bench-sim            simulated seconds per wall second, both plants
   make bench-symptoms       the measured fault-symptom table
@@ -59,7 +61,7 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make bench-envelope       every fault x mode at every envelope point: verdicts, confusion matrix
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
-  make sil-pil              instructions per step on QEMU (Cortex-M4/M0+ code), frames vs SIL
+  make bench-pil            PIL figures incl. the demo, and the RLS update vs textbook float/double/FPU
 
 Code
   make dbc-gen              regenerate the C codecs and tables after editing dbc/

@@ -95,26 +95,8 @@ BENCH_STEPS += sil-bench
 sil-long: $(SIL_REL_BIN)
 	@bash tests/sil/run_scenarios.sh $(SIL_REL_BIN) $(sort $(wildcard tests/sil/long/*.scn))
 
-# PIL-lite: the application cross-compiled (-Os, as `make firmware`) for
-# each core, run on QEMU mps2-an386 (Cortex-M4; the M0+ code runs on the
-# same core, so its figures are instruction counts) with -icount, fed the
-# frames of the SIL demo's bus log: instructions per canfdi_app_step from
-# SysTick, and the ECU's frames compared bit for bit with the host run.
-# Semihosting (rdimon, PIL_LDFLAGS) reads the log: a test harness, not firmware.
-SIL_PIL_LOG := build/demo/canfdi-demo.log
-SIL_PIL_CORES := cortex-m4 cortex-m0plus
-SIL_PIL_ELFS := $(foreach c,$(SIL_PIL_CORES),$(BUILD)/pil/pil_step_$(c).elf)
-$(BUILD)/pil/pil_step_%.elf: tests/sil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPT)
-	@mkdir -p $(@D)
-	$(ARM_CC) $(TGT_ARCH_$*) $(TGT_CFLAGS) $(PIL_LDFLAGS) -o $@ $(filter %.c,$^)
-
-.PHONY: sil-pil
-sil-pil: $(SIL_BIN) $(SIL_PIL_ELFS)
-	@mkdir -p $(dir $(SIL_PIL_LOG))
-	@$(SIL_BIN) -q -s tests/sil/scenarios/demo.scn -l $(SIL_PIL_LOG) >/dev/null
-	@set -e; for c in $(SIL_PIL_CORES); do echo "== $$c code"; \
-	  qemu-system-arm -M mps2-an386 -nographic -icount shift=6 \
-	    -semihosting-config enable=on,target=native -kernel $(BUILD)/pil/pil_step_$$c.elf; done
+# Processor in the loop (the cross-compiled application on QEMU, fed SIL bus
+# logs): mk/pil.mk, tests/pil/.
 
 # Unit tests that close the loop with the plants decode the ECU's frames
 # with the tester codec above (pack and unpack of every message), in every

@@ -15,7 +15,11 @@ TGT_CORES := cortex-m4 cortex-m0plus
 # Firmware sources generated outside firmware/ (e.g. a DBC codec under
 # $(BUILD)/gen) may be appended here by their fragment.
 FW_TARGET_EXTRA_SRC ?=
-TGT_PORT_SRC := $(sort $(wildcard firmware/port/cortexm/*.c))
+# The port's start-up code; its application loop and example board link
+# into the footprint image (mk/pil.mk), not the guard image (which has its
+# own main), and get the keyword check only.
+TGT_PORT_APP_SRC := $(PIL_PORT_APP_SRC)
+TGT_PORT_SRC := $(filter-out $(TGT_PORT_APP_SRC),$(sort $(wildcard firmware/port/cortexm/*.c)))
 TGT_FW_SRC := $(FW_SRC) $(TGT_PORT_SRC) $(FW_TARGET_EXTRA_SRC)
 TGT_FW_HDR := $(sort $(shell find firmware -name '*.h' -not -path 'firmware/port/*' 2>/dev/null) \
                      $(wildcard firmware/port/cortexm/*.h))
@@ -44,7 +48,7 @@ $(BUILD)/target/$(1)/obj/%.o: %.c
 	@mkdir -p $$(@D)
 	$(ARM_CC) $(TGT_ARCH_$(1)) $(TGT_CFLAGS) -MMD -MP -c $$< -o $$@
 
-$(BUILD)/target/$(1)/canfdi.elf: $(call tgt_fw_obj,$(1)) $(BUILD)/target/$(1)/obj/$(TGT_MAIN:.c=.o) $(TGT_LDSCRIPT) $(TGT_SRCLIST)
+$(BUILD)/target/$(1)/canfdi.elf: $(call tgt_fw_obj,$(1)) $(BUILD)/target/$(1)/obj/$(TGT_MAIN:.c=.o) $(TGT_LDSCRIPTS) $(TGT_SRCLIST)
 	$(ARM_CC) $(TGT_ARCH_$(1)) $(TGT_LDFLAGS) -Wl,-Map,$$(@:.elf=.map) -o $$@ $$(filter %.o,$$^)
 	@printf '%s\n' $(call tgt_fw_obj,$(1)) > $$@.objs
 endef
@@ -58,7 +62,7 @@ firmware-guard: $(TGT_ELFS)
 	@$(ARM_SIZE) $(TGT_ELFS)
 	@bash tests/target/fw_guard.sh --nm $(ARM_NM) --main $(TGT_MAIN) \
 	  --sources "$(TGT_FW_SRC)" --headers "$(TGT_FW_HDR)" \
-	  --kw-only "$(sort $(wildcard firmware/port/linux/*.[ch]))" \
+	  --kw-only "$(sort $(wildcard firmware/port/linux/*.[ch])) $(TGT_PORT_APP_SRC)" \
 	  $(foreach c,$(TGT_CORES),$(c)=$(BUILD)/target/$(c)/canfdi.elf)
 
 # Proves the guard catches what it claims to (builds copies of the tree).

@@ -80,17 +80,17 @@
  * application adds only the modules' conversions and saturating
  * arithmetic (core/canfdi_fixp.h). Counters saturate.
  *
- * Cost per canfdi_app_step, executed instructions measured on QEMU
- * mps2-an386 with -icount (SysTick), arm-none-eabi-gcc 12 -Os, over the
- * 24 000 steps of the SIL demo (tests/sil/scenarios/demo.scn), `make
- * sil-pil` (the M0+ code runs on the same emulated core: instruction counts,
- * not cycles):
- *                      min      mean     max
- *   Cortex-M4          27 200   48 400   72 500
- *   Cortex-M0+ code    51 000   94 100  137 900
+ * Cost per canfdi_app_step, executed instructions measured on QEMU with
+ * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
+ * build/bench/pil.json): the 24 000 steps of the SIL demo on the M3/M4, the
+ * PIL scenarios on the M0 (microbit, real ARMv6-M):
+ *                          min      mean     max
+ *   Cortex-M3 (an385)      26 800   36 300   42 900
+ *   Cortex-M4 (an386)      26 800   36 300   42 800
+ *   Cortex-M0 (microbit)   ~50 000  ~78 000  ~92 000
  * The model layer dominates (SVFs every step, RLS updates decimated inside
- * the modules). A 1 ms step needs a Cortex-M4 of roughly 100 MHz or more
- * with margin; on a Cortex-M0+ at 48 MHz it does not fit. Host (x86-64,
+ * the modules). A 1 ms step needs a Cortex-M4 of roughly 60 MHz or more
+ * with margin; on a Cortex-M0 at 48 MHz it does not fit. Host (x86-64,
  * gcc -O2, callgrind): `make sil-bench`. The same run shows the ECU's
  * frames bit-identical between the host build and both target builds.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host)

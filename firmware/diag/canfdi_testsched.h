@@ -48,7 +48,7 @@
  * only (core/canfdi_count.h).
  *
  * Cost per canfdi_testsched_step: a few compares and increments, O(1), no
- * multiplication. Memory: sizeof(canfdi_testsched_t) = 44 bytes on a
+ * multiplication. Memory: sizeof(canfdi_testsched_t) = 64 bytes on a
  * 32-bit target, caller-owned. No heap, no globals.
  */
 #ifndef CANFDI_TESTSCHED_H

@@ -3,92 +3,116 @@
  * UD-factorised form of Bierman and Thornton, in integer arithmetic.
  *
  * Model. y(k) = phi(k)^T theta + e(k) for up to CANFDI_CFG_RLS_MAX_PARAMS
- * parameters. Each update minimises sum_k lambda^(N-k) e(k)^2 (Isermann,
- * Fault-Diagnosis Systems, ch. 9; Ljung & Soederstroem for the UD form).
+ * parameters (at most 7: the 64-bit sums below are sized for it). Each
+ * update minimises sum_k lambda^(N-k) e(k)^2 (Isermann, Fault-Diagnosis
+ * Systems, ch. 9; Ljung & Soederstroem for the UD form).
  *
  * Why UD. Plain covariance RLS updates P directly; with 32-bit numbers
  * P - P phi phi^T P / (lambda + phi^T P phi) loses symmetry and positive
- * definiteness within minutes. Here P = U D U^T (U unit upper triangular,
- * D diagonal) and the update (Bierman's measurement update with forgetting)
- * multiplies each d_j by alpha_(j-1) / (alpha_j lambda) with
- * alpha_j = alpha_(j-1) + f_j^2 d_j > 0: every d_j stays positive by
- * construction, so P stays positive definite whatever the rounding. d_j is
- * additionally floored at 2^-60 (counted in diag.saturations; never seen in
- * the tests).
+ * definiteness within minutes. Here P = U D U^T / a0 (U unit upper
+ * triangular, D diagonal, a0 > 0 a scale) and the update is Bierman's
+ * measurement update: with f = U^T phi, g = D f, alpha_0 = lambda a0 and
+ * alpha_(j+1) = alpha_j + f_j g_j, every d_j is multiplied by
+ * alpha_j / alpha_(j+1) in (0, 1]: D stays positive by construction, so P
+ * stays positive definite whatever the rounding. d_j is additionally
+ * floored at 2^-60 a0 (counted in diag.saturations; never seen in the
+ * tests).
  *
- * Number representation. D spans many decades (P0 ~ 1e4 at start, ~1e-4
- * when converged, ~1e4 again while forgetting without excitation), and the
- * entries of U, the gain and the parameters differ by orders of magnitude
- * too. Every internal quantity is therefore a canfdi_rls_xf_t: a 32-bit
- * mantissa m with 2^29 <= |m| < 2^30 (or m == 0) and its own exponent e,
- * value m * 2^e — a per-element exponent ("block floating point" with block
- * size 1), implemented with integer operations only: products are 64-bit
- * (|m1 m2| < 2^60), sums are aligned in 64 bits with 32 guard bits,
- * quotients use canfdi_div_s32_qn, and every result is renormalised with
- * rounding to nearest (ties away from zero). Relative precision ~2^-30 per
- * operation; exponents are clamped to +-2^16 (unreachable with the trace
- * bound below). No float, no division by a run-time zero (alpha >= lambda).
+ * Forgetting in one multiply. P / lambda is a0 lambda: the scale a0 absorbs
+ * the forgetting (a0 <- lambda a0 on every applied update), so D is never
+ * swept by 1/lambda. The trace bound scales a0 as well (below). a0 and the
+ * d_j move together by powers of two when a0 leaves [2^-200, 2^100]
+ * (exact).
+ *
+ * Number formats (what is kept, and why it is enough):
+ *   - D, a0 and the alpha_j: positive numbers m 2^e with a 32-bit
+ *     mantissa m in [2^31, 2^32) and an exponent each (canfdi_rls_pf_t):
+ *     relative precision 2^-32 per operation over any range. D spans many
+ *     decades (P0 ~ 1e4 at start, ~1e-4 converged, ~1e4 again while
+ *     forgetting without excitation) and needs this in every element.
+ *   - U: int32_t mantissas |u| <= 2^30 with one exponent per column (>= -30,
+ *     so an entry keeps 2^-30 absolute resolution at least, and 30 bits
+ *     relative to its column's largest entry).
+ *   - theta: one block, int32_t mantissas |theta| <= 2^30 with a shared
+ *     exponent (normalised units): 30 bits relative to the largest |theta|.
+ *   - the regressors of one update, and the gain vector P phi: one block
+ *     each, 30 and ~27 bits relative to their largest element (the gain's
+ *     exponent comes from a bound of |U g|, which costs ceil(log2 n) + 1
+ *     bits).
+ *   Every product is a 32x32->64 multiply (SMULL/UMULL, SMLAL) rounded to
+ *   its high word half up (core/canfdi_intrin.h), normalisation uses CLZ
+ *   (a plain-C fallback on ARMv6-M), and an update takes ONE reciprocal:
+ *   the inverses of alpha_1..alpha_n come from the reciprocal of their
+ *   product (prefix products, then back: 3 (n - 1) multiplies), computed by
+ *   a 32-bit division seed, one Newton step and an exact correction. No
+ *   float, no division by a run-time zero (alpha_j >= lambda a0 > 0), no
+ *   saturation on the update's path: every format is chosen from a bound so
+ *   that nothing can overflow, and a block that would be exceeded is
+ *   shifted first (its exponent rises).
+ *   Precision kept (tests/unit/test_rls.c, tests/ref/ref_rls.cpp, against
+ *   a covariance RLS in double fed the same Q16.16 samples): theta within
+ *   ~1e-6 of max(1, |theta|), P within ~2e-5 of sqrt(P_ii P_jj), for
+ *   n = 1..6, gated or not, through the trace bound, over 200 000 updates,
+ *   and with regressors whose normalised sizes span 2^-6..2^6 (theta within
+ *   7e-6 there: the gain block's spread costs its small elements bits).
+ *   Range: normalised regressors and outputs of any size the Q16.16 inputs
+ *   and shifts give; the excitation measure saturates at 2^14 (so
+ *   excite_min is limited to 2^14).
  *
  * Normalisation. Regressors and output enter as Q16.16 in physical units.
  * Each has a power-of-two normalising shift s (cfg): the RLS works on
  * phi_norm_i = phi_i 2^-s_i and y_norm = y 2^-s_y, chosen by the caller so
- * that the normalised signals are O(1). Because the representation carries
- * exponents, this costs nothing and loses nothing; it matters for the
- * meaning of P0 = p0 I, of the trace bound and of the excitation threshold,
- * which are all in normalised units. The physical parameter is
- * theta_i = theta_norm_i 2^(s_y - s_i).
+ * that the normalised signals are O(1): the blocks above then keep their
+ * full precision. The shifts define the meaning of P0 = p0 I, of the trace
+ * bound and of the excitation threshold, which are all in normalised
+ * units. The physical parameter is theta_i = theta_norm_i 2^(s_y - s_i).
  *
  * Wind-up protection (two mechanisms, both counted):
  *  1. Excitation gate. Each update first measures the excitation of every
- *     regressor: the squared deviation of the normalised regressor from
- *     its running mean, (phi_norm_i - mean_i)^2, averaged by a first-order
+ *     regressor selected by excite_mask (constant regressors must be left
+ *     out): the squared deviation of the normalised regressor from its
+ *     running mean, (phi_norm_i - mean_i)^2, averaged by a first-order
  *     filter with time constant 2^excite_shift updates (the means use the
- *     same constant). The excitation is the SMALLEST of these mean-square
- *     deviations over the regressors selected by excite_mask (constant
- *     regressors must be left out). If it is below excite_min, the update
- *     is skipped entirely: neither theta nor P change, and in particular no
- *     forgetting is applied (diag.skipped). Why: at a constant operating
- *     point the data hold information about one direction only; forgetting
- *     would inflate P in all others (wind-up) and a later disturbance would
- *     throw the estimate around. Skipping keeps the last good estimate and
+ *     same constant; mean in Q32.32 physical, deviation in Q24 normalised,
+ *     measure in Q48). The excitation is the SMALLEST of these mean-square
+ *     deviations. If it is below excite_min, the update is skipped
+ *     entirely: neither theta nor P change, and in particular no forgetting
+ *     is applied (diag.skipped). Why: at a constant operating point the
+ *     data hold information about one direction only; forgetting would
+ *     inflate P in all others (wind-up) and a later disturbance would throw
+ *     the estimate around. Skipping keeps the last good estimate and
  *     covariance. Why the minimum and not the sum: in closed loop one
  *     regressor can stay busy on noise (e.g. a current driven by a
  *     controller's reaction to sensor noise) while another carries nothing
  *     but noise (a velocity at standstill); a summed measure would open the
  *     gate and let that parameter drift on noise correlations.
- *  2. Trace bound. After each update, if trace(P) > trace_max, D is
- *     scaled by trace_max / trace(P) (diag.trace_clips). This catches
- *     partial excitation (some regressors vary, others do not), where the
- *     gate opens and forgetting inflates the unexcited directions. Scaling
- *     D keeps U, so P keeps its shape and stays positive definite.
+ *  2. Trace bound. After each update, if trace(P) > trace_max, P is
+ *     scaled by trace_max / trace(P) through a0 (diag.trace_clips; one
+ *     multiply by the stored 1 / trace_max). This catches partial
+ *     excitation (some regressors vary, others do not), where the gate
+ *     opens and forgetting inflates the unexcited directions. Scaling keeps
+ *     U and the ratios of D, so P keeps its shape and stays positive
+ *     definite. The exact trace (n (n - 1) / 2 squares) is only computed
+ *     when a bound from the exponents does not already show it below the
+ *     limit, i.e. only near the bound.
  *
- * Cost per update with n parameters, in xf operations (mul/add/div, each
- * one 64-bit multiply or add plus a renormalisation):
- *   excitation: 5n;  prediction error: 2n;  f = U^T phi and g = D f:
- *   n(n-1) + n;  Bierman loop: n divisions + 5n + 4 n(n-1)/2;  parameter
- *   update: 2n + 1;  trace bound: n(n-1) + 2n, plus n + 1 when clipping.
- *   Total ~ 3 n^2 + 14 n xf operations + n divisions: ~ 50 for n = 3,
- *   ~ 180 for n = 6. A skipped update costs the excitation measure and the
- *   prediction error only (7 n).
+ * Cost per update with n parameters: the gate 5 64-bit operations per gated
+ * regressor; O(n^2) 32x32->64 multiply-accumulates (f = U^T phi: n(n-1)/2,
+ * the column pass: n(n-1), theta and the error: 2n); O(n) positive-number
+ * multiplies (~9 per column: g, f g, the prefix products and inverses,
+ * mu, two for d); one reciprocal.
  * Measured executed instructions per call (arm-none-eabi-gcc 12 -Os, QEMU
- * mps2-an386 -icount, SysTick; 2000 calls with random regressors of
- * magnitude <= 1, gate always open; the loop counts are data-independent,
- * so the mean is close to the worst case), mean / max:
- *               Cortex-M4          Cortex-M0+ code
- *   n = 3       11.3 k / 11.5 k    20.3 k / 20.6 k
- *   n = 4       17.1 k / 17.3 k    30.3 k / 30.7 k
- *   n = 5       23.8 k / 24.0 k    42.0 k / 42.5 k
- *   n = 6       31.6 k / 31.9 k    55.4 k / 56.0 k
- *   skipped update (n = 3): 1.35 k (M4), 2.29 k (M0+)
- * i.e. ~230 (M4) and ~400 (M0+) instructions per xf operation: too much
- * for every 1 ms step on a 48 MHz M0+ (n = 3 takes 0.42 ms), which is why
- * the estimators decimate the update (every 2..5 steps) and never run two
- * updates in one step.
- * Memory: sizeof(canfdi_rls_t) = 432 bytes with the default
- * CANFDI_CFG_RLS_MAX_PARAMS = 6 on a 32-bit target (8 bytes per xf:
- * n(n-1)/2 for U, 4n for theta, D and the excitation filters, 4 scalars;
- * 8n for the running means; the cfg copy). Caller-owned, no heap, no
- * globals; an update uses ~32 n_max + 64 bytes of stack.
+ * -icount, SysTick; `make bench-pil`: bench/bench_rls_pil.c, 2000 calls,
+ * n = 4, four regressors uniform in [-1, 1), gate open), see the README's
+ * figures table and $(BUILD)/bench/pil.json for the figures of one run,
+ * side by side with the textbook covariance RLS in float and double.
+ * A skipped update costs the gate and the prediction error only.
+ * Memory: sizeof(canfdi_rls_t) = 368 bytes with the default
+ * CANFDI_CFG_RLS_MAX_PARAMS = 6 on a 32-bit target (asserted in
+ * canfdi_rls.c on the target builds): 4 bytes per U entry and theta, 8 per
+ * D element, 16 per regressor for the gate's mean and measure, the cfg
+ * copy. Caller-owned, no heap, no globals; an update uses ~ 40 n_max + 100
+ * bytes of stack (tests/pil/footprint.py measures the worst case).
  */
 #ifndef CANFDI_RLS_H
 #define CANFDI_RLS_H
@@ -99,11 +123,23 @@
 
 #define CANFDI_RLS_N_U ((CANFDI_CFG_RLS_MAX_PARAMS * (CANFDI_CFG_RLS_MAX_PARAMS - 1U)) / 2U)
 
-/* A number m * 2^e with 2^29 <= |m| < 2^30, or m == 0 (see above). */
+/* Largest excitation threshold (Q16.16, 2^14): the measure saturates there. */
+#define CANFDI_RLS_EXCITE_MIN_MAX_Q16 ((int32_t)1 << 30)
+/* Lowest exponent of the theta block (a block of zeros keeps its own). */
+#define CANFDI_RLS_THETA_EMIN (-1000000)
+
+/* A signed number m 2^e with 2^29 <= |m| < 2^30, or m == 0: the read-out
+ * form of canfdi_rls_d(). */
 typedef struct {
   int32_t m;
   int32_t e;
 } canfdi_rls_xf_t;
+
+/* A positive number m 2^e with 2^31 <= m < 2^32, or m == 0 (internal). */
+typedef struct {
+  uint32_t m;
+  int32_t e;
+} canfdi_rls_pf_t;
 
 typedef struct {
   uint8_t n_params;                          /* 1 .. CANFDI_CFG_RLS_MAX_PARAMS */
@@ -113,7 +149,8 @@ typedef struct {
   int32_t p0_q16;              /* initial P = p0 I, normalised units, > 0 */
   int32_t trace_max_q16;       /* trace bound, normalised units, >= n p0 */
   int32_t excite_min_q16;      /* gate threshold, mean-square normalised
-                                * deviation (Q16.16, >= 0; 0: always update) */
+                                * deviation (Q16.16, 0 .. 2^14; 0: always
+                                * update) */
   uint8_t excite_shift;        /* time constant 2^k updates, 1..16 */
   uint16_t excite_mask;        /* bit i: regressor i counts for the gate;
                                 * 0 selects all */
@@ -126,7 +163,7 @@ typedef struct {
 typedef struct {
   uint32_t updates;     /* updates applied */
   uint32_t skipped;     /* updates skipped by the excitation gate */
-  uint32_t trace_clips; /* times D was scaled down to the trace bound */
+  uint32_t trace_clips; /* times P was scaled down to the trace bound */
   uint32_t resets;      /* canfdi_rls_reset calls (init counts as none) */
   uint32_t boosts;      /* canfdi_rls_boost calls */
   uint32_t saturations; /* d_j floored at 2^-60 */
@@ -134,20 +171,23 @@ typedef struct {
 
 typedef struct {
   canfdi_rls_cfg_t cfg;
-  canfdi_rls_xf_t lambda;     /* lambda and 1 / lambda */
-  canfdi_rls_xf_t inv_lambda;
-  canfdi_rls_xf_t trace_max;
-  canfdi_rls_xf_t excite_min;
-  canfdi_rls_xf_t theta[CANFDI_CFG_RLS_MAX_PARAMS]; /* normalised */
-  canfdi_rls_xf_t d[CANFDI_CFG_RLS_MAX_PARAMS];
-  canfdi_rls_xf_t u[CANFDI_RLS_N_U]; /* strict upper triangle, column-wise:
-                                      * u_ij (i < j) at j (j - 1) / 2 + i */
-  int64_t mean[CANFDI_CFG_RLS_MAX_PARAMS]; /* running means of phi, Q32.32 */
-  canfdi_rls_xf_t excite[CANFDI_CFG_RLS_MAX_PARAMS]; /* filtered mean-square
-                                                      * deviation per regressor */
-  canfdi_rls_xf_t err;        /* last a-priori error, normalised */
+  int32_t theta[CANFDI_CFG_RLS_MAX_PARAMS]; /* normalised theta_i = theta[i] 2^theta_e */
+  int32_t theta_e;
+  int32_t u[CANFDI_RLS_N_U]; /* strict upper triangle, column-wise: u_ij (i < j)
+                              * = u[j (j - 1) / 2 + i] 2^u_e[j] */
+  int16_t u_e[CANFDI_CFG_RLS_MAX_PARAMS];
+  canfdi_rls_pf_t d[CANFDI_CFG_RLS_MAX_PARAMS]; /* P = U D U^T / a0 */
+  canfdi_rls_pf_t a0;
+  canfdi_rls_pf_t lambda;        /* from cfg */
+  canfdi_rls_pf_t trace_max;
+  canfdi_rls_pf_t inv_trace_max;
+  int64_t mean[CANFDI_CFG_RLS_MAX_PARAMS];   /* running means of phi, Q32.32 physical */
+  int64_t excite[CANFDI_CFG_RLS_MAX_PARAMS]; /* filtered squared normalised deviation, Q48 */
+  canfdi_rls_pf_t err;        /* last a-priori error |e| (normalised) and its sign */
+  bool err_neg;
   bool primed;                /* means initialised from a first sample */
   bool excited;               /* last gate decision */
+  uint8_t clog2n;             /* ceil(log2 n) */
   canfdi_rls_diag_t diag;
 } canfdi_rls_t;
 

@@ -24,6 +24,7 @@
 #include "comm/canfdi_tx.h"
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_intrin.h"
 #include "core/canfdi_qconst.h"
 #include "detect/canfdi_adapt.h"
 #include "detect/canfdi_cusum.h"
@@ -88,6 +89,9 @@ static void guard_fixp(void)
 
   sink32(canfdi_wrap_u32_to_s32(in_u32));
   sink64(canfdi_wrap_u64_to_s64(in_u64));
+  sink32((int32_t)canfdi_clz32(in_u32));
+  sink32((int32_t)canfdi_clz64(in_u64));
+  sink32(canfdi_mla_hi_rnd(a, b, c));
   sink32(canfdi_clamp_s32(a, b, c));
   sink32(canfdi_asr32(a, n));
   sink64(canfdi_asr64(a64, n));

@@ -27,6 +27,7 @@
 #include <stdlib.h>
 
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_intrin.h"
 #include "unit_main.h"
 
 __extension__ typedef __int128 i128;
@@ -984,6 +985,35 @@ END_TEST
 
 /* ------------------------------------------------------------------------ */
 
+/* canfdi_intrin.h: the plain-C forms (the host build) against their
+ * definitions, on every bit position and on products at the rounding
+ * boundary. The ARM forms are checked equal to these bit for bit by the PIL
+ * rig (tests/pil). */
+START_TEST(test_intrin)
+{
+  unsigned b;
+  ck_assert_uint_eq(canfdi_clz32(0U), 32U);
+  ck_assert_uint_eq(canfdi_clz64(0U), 64U);
+  for (b = 0U; b < 32U; b++) {
+    const uint32_t x = (uint32_t)1 << b;
+    ck_assert_uint_eq(canfdi_clz32(x), 31U - b);
+    ck_assert_uint_eq(canfdi_clz32(x | (x - 1U)), 31U - b);
+    ck_assert_uint_eq(canfdi_clz32(x | 1U), 31U - b);
+  }
+  for (b = 0U; b < 64U; b++) {
+    const uint64_t x = (uint64_t)1 << b;
+    ck_assert_uint_eq(canfdi_clz64(x | (x - 1U)), 63U - b);
+  }
+  /* acc + floor((a b + 2^31) / 2^32) */
+  ck_assert_int_eq(canfdi_mla_hi_rnd(0, 1 << 16, 1 << 15), 1);      /* +0.5: half up */
+  ck_assert_int_eq(canfdi_mla_hi_rnd(0, -(1 << 16), 1 << 15), 0);   /* -0.5: half up */
+  ck_assert_int_eq(canfdi_mla_hi_rnd(0, 1 << 16, (1 << 15) - 1), 0);
+  ck_assert_int_eq(canfdi_mla_hi_rnd(5, INT32_MIN, INT32_MIN), 5 + (1 << 30));
+  ck_assert_int_eq(canfdi_mla_hi_rnd(-7, INT32_MAX, INT32_MIN), -7 - (1 << 30) + 1);
+  ck_assert_int_eq(canfdi_mla_hi_rnd(0, -3, 1 << 30), -1); /* -0.75 -> -1 */
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("fixp");
@@ -993,6 +1023,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_asr32, 0, N_SHIFT_GROUPS);
   tcase_add_loop_test(tc, test_asr64, 0, N_SHIFT_GROUPS);
   tcase_add_test(tc, test_round_ties);
+  tcase_add_test(tc, test_intrin);
   tcase_add_loop_test(tc, test_shl, 0, N_SHIFT_GROUPS);
   suite_add_tcase(s, tc);
 

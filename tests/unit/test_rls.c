@@ -18,7 +18,12 @@
  *     estimator re-converges to new parameters;
  *   - an abrupt parameter change is followed within the forgetting memory;
  *   - reset restores theta0 and P0 (or keeps theta), and recovers;
- *   - nearly collinear regressors keep the factorisation valid.
+ *   - nearly collinear regressors keep the factorisation valid;
+ *   - badly scaled regressors (normalised sizes from 2^-6 to 2^6, i.e. the
+ *     caller's shifts off by up to 2^6 either way) still follow the double
+ *     twin to the same tolerances;
+ *   - 200 000 excited updates (the scale a0 crosses its exponent window
+ *     ~20 times) keep the invariants and the twin's theta and P.
  */
 #include <check.h>
 #include <math.h>
@@ -108,6 +113,8 @@ static const cfg_case_t cfg_cases[] = {
     {F_TRMAX, 100 * 65536, -CANFDI_EINVAL}, /* < n p0 for n = 3 */
     {F_TRMAX, 300 * 65536, CANFDI_OK},
     {F_EXMIN, -1, -CANFDI_EINVAL},
+    {F_EXMIN, (int32_t)1 << 30, CANFDI_OK},
+    {F_EXMIN, ((int32_t)1 << 30) + 1, -CANFDI_EINVAL},
     {F_EXSHIFT, 0, -CANFDI_EINVAL},
     {F_EXSHIFT, 17, -CANFDI_EINVAL},
     {F_EXSHIFT, 16, CANFDI_OK},
@@ -561,6 +568,128 @@ START_TEST(test_collinear)
 }
 END_TEST
 
+/* ---- badly scaled regressors -------------------------------------------- */
+
+/* The shifts say "O(1)" but the regressors are 2^-6, 2^-2, 2^2 and 2^6 in
+ * normalised units: P's diagonal then spans 2^24, the theta block 2^12. */
+START_TEST(test_bad_scaling)
+{
+  static const int sc[4] = {-6, -2, 2, 6};
+  canfdi_rls_cfg_t c;
+  canfdi_rls_t r;
+  dbl_rls_t d;
+  double th[4] = {0.7, -1.3, 2.1, 0.4};
+  double worst_th = 0.0;
+  double worst_p = 0.0;
+  int k;
+  int i;
+  int j;
+  rng_seed(77U);
+  base_cfg(&c, 4);
+  for (i = 0; i < 4; i++) {
+    c.phi_shift[i] = 0;
+  }
+  c.y_shift = 0;
+  c.forget_q31 = CANFDI_Q31_RATIO(2, 100);
+  c.trace_max_q16 = 30000 * 65536;
+  ck_assert_int_eq(canfdi_rls_init(&r, &c), CANFDI_OK);
+  memset(&d, 0, sizeof d);
+  d.n = 4;
+  d.lam = 1.0 - (double)c.forget_q31 / 2147483648.0;
+  for (i = 0; i < 4; i++) {
+    d.p[i][i] = (double)c.p0_q16 / Q16;
+  }
+  for (k = 0; k < 3000; k++) {
+    int32_t phi[4];
+    double phin[4];
+    double y = 0.0;
+    int32_t yq;
+    for (i = 0; i < 4; i++) {
+      phi[i] = q16(ldexp(2.0 * rng_u() - 1.0, sc[i]));
+      phin[i] = (double)phi[i] / Q16;
+      y += th[i] * phin[i];
+    }
+    yq = q16(y + 0.01 * rng_n());
+    (void)canfdi_rls_update(&r, phi, yq);
+    dbl_update(&d, phin, (double)yq / Q16);
+    CHECK(canfdi_rls_invariants_hold(&r));
+    if ((k % 50) == 49) {
+      for (i = 0; i < 4; i++) {
+        const double err = fabs(theta_phys(&r, i) - d.th[i]) / fmax(1.0, fabs(d.th[i]));
+        worst_th = fmax(worst_th, err);
+        for (j = 0; j < 4; j++) {
+          /* read-out format with ~29 bits below sqrt(P_ii P_jj) */
+          const double sc2 = sqrt(d.p[i][i] * d.p[j][j]);
+          const int fr = (int)fmin(31.0, fmax(0.0, 29.0 - ceil(log2(sc2))));
+          const double pf = ldexp((double)canfdi_rls_cov_qn(&r, (unsigned)i, (unsigned)j, (unsigned)fr), -fr);
+          worst_p = fmax(worst_p, fabs(pf - d.p[i][j]) / sc2);
+        }
+      }
+    }
+  }
+  SHOW("rls bad scaling: max |theta - theta_double| %.3g (rel), max |P - P_double| %.3g (rel)\n", worst_th,
+       worst_p);
+  CHECK(worst_th <= 1e-5);
+  CHECK(worst_p <= 1e-4);
+}
+END_TEST
+
+/* ---- long excited run ----------------------------------------------------- */
+
+START_TEST(test_long_run)
+{
+  canfdi_rls_cfg_t c;
+  canfdi_rls_t r;
+  dbl_rls_t d;
+  double th[3] = {1.1, -0.6, 0.25};
+  double worst_th = 0.0;
+  long k;
+  int i;
+  rng_seed(31U);
+  base_cfg(&c, 3); /* no gate: the twin updates every sample too */
+  ck_assert_int_eq(canfdi_rls_init(&r, &c), CANFDI_OK);
+  memset(&d, 0, sizeof d);
+  d.n = 3;
+  d.lam = 1.0 - (double)c.forget_q31 / 2147483648.0;
+  for (i = 0; i < 3; i++) {
+    d.p[i][i] = (double)c.p0_q16 / Q16;
+  }
+  for (k = 0; k < 200000; k++) {
+    int32_t phi[3];
+    double phin[3];
+    int32_t y;
+    gen_phi(3, &c, phi);
+    y = q16(dot_phys(3, th, phi) + 0.02 * rng_n());
+    for (i = 0; i < 3; i++) {
+      phin[i] = ldexp((double)phi[i] / Q16, -c.phi_shift[i]);
+    }
+    (void)canfdi_rls_update(&r, phi, y);
+    dbl_update(&d, phin, ldexp((double)y / Q16, -c.y_shift));
+    if ((k % 1000) == 999) {
+      CHECK(canfdi_rls_invariants_hold(&r));
+      for (i = 0; i < 3; i++) {
+        const double tp = ldexp(d.th[i], c.y_shift - c.phi_shift[i]);
+        worst_th = fmax(worst_th, fabs(theta_phys(&r, i) - tp) / fmax(1.0, fabs(tp)));
+      }
+    }
+  }
+  SHOW("rls long run (200000 updates): max |theta - theta_double| %.3g (rel), updates %u\n", worst_th,
+       canfdi_rls_diag(&r)->updates);
+  ck_assert_uint_eq(canfdi_rls_diag(&r)->updates, 200000U);
+  CHECK(worst_th <= 1e-5);
+  {
+    /* P after 200 000 updates against the twin */
+    int j;
+    for (i = 0; i < 3; i++) {
+      for (j = 0; j < 3; j++) {
+        const double pf = (double)canfdi_rls_cov_qn(&r, (unsigned)i, (unsigned)j, 24U) / 16777216.0;
+        CHECK(fabs(pf - d.p[i][j]) <= 1e-4 * fmax(1e-3, sqrt(d.p[i][i] * d.p[j][j])));
+      }
+    }
+  }
+}
+END_TEST
+
 START_TEST(test_readout)
 {
   canfdi_rls_cfg_t c;
@@ -594,6 +723,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_twin_double, 1, NMAX + 1);
   tcase_add_test(tc, test_shift_invariance);
   tcase_add_test(tc, test_collinear);
+  tcase_add_test(tc, test_bad_scaling);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("robustness");
@@ -601,6 +731,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_no_excitation, 0, 2);
   tcase_add_test(tc, test_tracking);
   tcase_add_test(tc, test_reset);
+  tcase_add_test(tc, test_long_run);
   suite_add_tcase(s, tc);
   return s;
 }

@@ -1,19 +1,19 @@
 /*
- * pil_step.c — the application on an emulated Cortex-M (QEMU -M mps2-an386,
- * -icount shift=6, semihosting), fed the frames of a SIL bus log, measuring
- * the executed instructions of every canfdi_app_step with SysTick and
- * comparing the ECU's frames bit for bit with the ones the host build sent
- * in the SIL run (the same core must give the same output on every rig).
+ * pil_step.c — processor in the loop: the application cross-compiled for a
+ * Cortex-M core and run on QEMU (-icount shift=6, semihosting), fed the
+ * frames of a SIL bus log, measuring the executed instructions of every
+ * canfdi_app_step with SysTick and comparing the ECU's frames bit for bit
+ * with the ones the host build sent in the SIL run (the same core must give
+ * the same output on every rig).
  *
- * Usage (see mk/sil.mk, `make sil-pil`):
- *   qemu-system-arm -M mps2-an386 -nographic -icount shift=6 \
- *     -semihosting-config enable=on,target=native -kernel pil_step.elf
- * reads build/demo/canfdi-demo.log (candump -L of `make demo`) relative to
- * QEMU's working directory.
- *
- * With -icount shift=6 SysTick (CLKSOURCE = core clock) advances 1.6 counts
- * per executed instruction (docs/design.md, facts about the build machines),
- * so instructions = counts * 5 / 8.
+ * Run by tests/pil/run_pil.sh (`make pil-test`, tests/pil/pil.mk) in a
+ * directory that holds the log as pil.log (candump -L of `canfdi-sil -l`).
+ * BENCH_TICKS_NUM / BENCH_TICKS_DEN: SysTick counts per executed
+ * instruction of the machine (8/5 on mps2 at 25 MHz, 128/125 on microbit at
+ * 16 MHz, one instruction every 64 ns with shift=6). Prints one line
+ *   pil: steps N min A mean B max C max_step K compared M differ D first F
+ * (instructions; F the first step whose frames differ, -1 for none) and
+ * exits 1 when a frame differs, 2 when the run cannot start.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,8 +27,14 @@
 
 extern void initialise_monitor_handles(void);
 
+#ifndef BENCH_TICKS_NUM
+#define BENCH_TICKS_NUM 8U
+#define BENCH_TICKS_DEN 5U
+#endif
+
 static canfdi_app_t app;
 static canfdi_app_cal_t cal;
+static uint32_t first_diff = UINT32_MAX;
 
 typedef struct {
   uint32_t id;
@@ -143,11 +149,14 @@ static void do_step(uint32_t t_us)
   } else {
     for (i = 0; i < n; i++) {
       if ((out[i].id != logged[i].id) || (out[i].dlc != logged[i].dlc) ||
-          (memcmp(out[i].data, logged[i].data, 8U) != 0)) {
+          (memcmp(out[i].data, logged[i].data, logged[i].dlc) != 0)) {
         mismatches++;
         break;
       }
     }
+  }
+  if ((mismatches != 0U) && (first_diff == UINT32_MAX)) {
+    first_diff = steps - 1U;
   }
   n_logged = 0U;
 }
@@ -167,9 +176,9 @@ int main(void)
     printf("pil: init failed\n");
     exit(2);
   }
-  f = fopen("build/demo/canfdi-demo.log", "r");
+  f = fopen("pil.log", "r");
   if (f == NULL) {
-    printf("pil: cannot open build/demo/canfdi-demo.log (run make demo first)\n");
+    printf("pil: cannot open pil.log in the working directory\n");
     exit(2);
   }
   while (fgets(line, (int)sizeof line, f) != NULL) {
@@ -195,12 +204,12 @@ int main(void)
     do_step(cur_t);
   }
   (void)fclose(f);
-  printf("pil: %lu steps; instructions per canfdi_app_step min %lu mean %lu max %lu (step %lu)\n",
-         (unsigned long)steps, (unsigned long)((ticks_min * 5U) / 8U),
-         (unsigned long)((ticks_sum * 5U) / (8U * (steps ? steps : 1U))),
-         (unsigned long)((ticks_max * 5U) / 8U), (unsigned long)max_step);
-  printf("pil: ECU frames compared with the host SIL run: %lu steps, %lu differ\n",
-         (unsigned long)compared, (unsigned long)mismatches);
+  printf("pil: steps %lu min %lu mean %lu max %lu max_step %lu compared %lu differ %lu first %ld\n",
+         (unsigned long)steps, (unsigned long)(((uint64_t)ticks_min * BENCH_TICKS_DEN) / BENCH_TICKS_NUM),
+         (unsigned long)((ticks_sum * BENCH_TICKS_DEN) / ((uint64_t)BENCH_TICKS_NUM * (steps ? steps : 1U))),
+         (unsigned long)(((uint64_t)ticks_max * BENCH_TICKS_DEN) / BENCH_TICKS_NUM), (unsigned long)max_step,
+         (unsigned long)compared, (unsigned long)mismatches,
+         (first_diff == UINT32_MAX) ? -1L : (long)first_diff);
   /* exit() ends the emulation through semihosting (returning from main
    * would idle in Reset_Handler) */
   exit((mismatches == 0U) ? 0 : 1);
