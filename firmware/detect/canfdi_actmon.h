@@ -4,9 +4,10 @@
  * Systems, ch. 7: limit checking of a signal relation).
  *
  *   monitor           symptom                              judged while
- *   THR tracking      the throttle does not follow its     the vote is valid and
- *                     position reference: |angle - ref|,   the throttle is
- *                     low-passed, above track_thr          energised
+ *   THR tracking      the throttle lags the slowest        the vote is valid and
+ *                     trajectory to its position           the throttle is
+ *                     reference, low-passed, above         energised
+ *                     track_thr
  *   THR no current    voltage applied, no motor current:   energised, |u_cmd| >
  *                     an open motor circuit                open_u_min, current valid
  *   DCM U_A command   the measured armature voltage U_A    the bridge drives
@@ -20,6 +21,18 @@
  * signal that tells them apart. The throttle's open circuit and jam are
  * hard symptoms of the diagnosis (diag/canfdi_diagnosis.h); UAC is a
  * symptom channel with sign.
+ *
+ * The tracking monitor compares the angle with an expected angle that
+ * moves towards the reference at track_slew per step, the slowest slew a
+ * healthy valve has anywhere in the envelope with a margin, not with the
+ * reference itself: a tip-in to wide open (10 -> 80 deg takes the valve
+ * 48 ms at 13.5 V, 84 ms at 9 V, docs/envelope.md) is a large reference
+ * error for tens of ms that says nothing about the valve. While the
+ * expected angle is on its way the lag counts only for a valve behind it
+ * (a valve faster than the slowest lags by nothing); once it has arrived
+ * (a steady or slow reference) the lag is |angle - ref|.
+ * While not judged the expected angle restarts at the measured angle, so a
+ * start-up with the setpoint already at wide open is the same stroke.
  *
  * The commands in the input are those the actuator manager applied over
  * the interval that ends with this step's samples (its output of the last
@@ -35,8 +48,9 @@
  *
  * Cost per canfdi_actmon_step: two filter updates (one 32x32->64 multiply
  * each), one saturating division when UAC is judged, ~20 compares; no loop.
- * Memory: sizeof(canfdi_actmon_t) = 60 bytes on a 32-bit target (config 28,
- * two filter states, diagnostics 20). Stack < 32 bytes. No heap.
+ * Memory: sizeof(canfdi_actmon_t) = 72 bytes on a 32-bit target (config 32,
+ * two filter states, the expected angle and its flag, diagnostics 20).
+ * Stack < 32 bytes. No heap.
  */
 #ifndef CANFDI_ACTMON_H
 #define CANFDI_ACTMON_H
@@ -47,6 +61,7 @@
 typedef struct {
   int32_t track_alpha_q16;    /* (0, 1]: low-pass of |angle - ref| per step */
   int32_t track_thr_rad_q16;  /* > 0: filtered error that means "not following" */
+  int32_t track_slew_rad_q16; /* > 0: the expected angle's largest move per step */
   int32_t open_u_min_V_q16;   /* > 0: |command| at which a current must flow */
   int32_t open_i_max_A_q16;   /* > 0: |current| below which none flows */
   int32_t uac_alpha_q16;      /* (0, 1]: low-pass of U_A - command per step */
@@ -93,16 +108,21 @@ typedef struct {
 typedef struct {
   canfdi_actmon_cfg_t cfg;
   int32_t track_err_rad_q16; /* filter state */
+  int32_t track_exp_rad_q16; /* expected angle (valid with track_exp_valid) */
   int32_t uac_V_q16;         /* filter state */
   canfdi_actmon_diag_t diag;
+  bool track_exp_valid;
   bool initialised;
 } canfdi_actmon_t;
 
 /*
  * Defaults of the product (the plants of docs/design.md):
- *   tracking: alpha 1/500 per step (~0.5 s), threshold 0.05 rad: a 25 deg
- *     stroke (error gone in ~50 ms) peaks below 0.03 rad, a valve held
- *     10 deg away crosses 0.05 rad after ~0.17 s;
+ *   tracking: alpha 1/500 per step (~0.5 s), threshold 0.05 rad, expected
+ *     slew 6 mrad per 1 ms step (6 rad/s, 41 % of the 14.6 rad/s a healthy
+ *     valve reaches on a 9 V supply): any stroke of a healthy valve lags
+ *     by nothing, a valve held 10 deg away from a steady reference crosses
+ *     0.05 rad after ~0.17 s, one stuck at the start of a 70 deg stroke
+ *     after ~0.1 s more than at a steady reference;
  *   open circuit: 3 V applied, below 0.05 A (the motor's 1.5 Ohm draws 2 A);
  *   UAC: alpha 1/8 per step (~8 ms), threshold 0.5 V (~40 sigma of the
  *     filtered 50 mV sensor noise, a quarter of the catalogue's default

@@ -259,7 +259,7 @@ static void usage(FILE *out)
           "  -t, --dtcs FILE       DTC descriptions (default dbc/dtcs.csv)\n"
           "      --seed N          override the scenario's noise seed\n"
           "      --timing          wall-clock time of canfdi_app_step: mean and max\n"
-          "      --symptoms        print the symptom vector every 100 ms on stderr\n"
+          "      --symptoms[=MS]   print the symptom vector every MS ms (default 100) on stderr\n"
           "      --sizes           print the firmware's RAM use and exit\n"
           "  -q, --quiet           only the verdict lines\n"
           "  -h, --help            this text\n"
@@ -458,6 +458,7 @@ int main(int argc, char **argv)
   unsigned long decimate = 1UL;
   bool quiet = false;
   bool symptoms = false;
+  unsigned long sym_every = 100UL;
   bool timing = false;
   double step_ns_sum = 0.0;
   double step_ns_max = 0.0;
@@ -494,6 +495,14 @@ int main(int argc, char **argv)
     } else if (strcmp(a, "--timing") == 0) {
       timing = true;
     } else if (strcmp(a, "--symptoms") == 0) {
+      symptoms = true;
+    } else if (strncmp(a, "--symptoms=", 11) == 0) {
+      char *end = NULL;
+      sym_every = strtoul(a + 11, &end, 10);
+      if ((end == (a + 11)) || (*end != '\0') || (sym_every == 0UL) || (sym_every > 60000UL)) {
+        fprintf(stderr, "canfdi-sil: --symptoms=MS wants 1..60000 ms, not '%s'\n", a + 11);
+        return 2;
+      }
       symptoms = true;
     } else if (strcmp(a, "--sizes") == 0) {
       printf("sizeof(canfdi_app_t) = %zu bytes (host; the target figure is in the .bss of "
@@ -735,7 +744,7 @@ int main(int argc, char **argv)
         /* EcuDiagnosis: in the log only */
       }
     }
-    if (symptoms && ((k % 100U) == 0U)) {
+    if (symptoms && ((k % sym_every) == 0U)) {
       const canfdi_symptoms_t *y = &app.sym;
       fprintf(stderr, "%6.2f rn %5.2f %5.2f %5.2f %5.2f v%x | pd %6.3f %6.3f %6.3f %6.3f v%x | thr rn %5.2f %5.2f %5.2f %5.2f pd %6.3f %6.3f %6.3f %6.3f v%x f%x\n",
               (double)t_us * 1e-6, y->dcm_rn_q16[0] / 65536.0, y->dcm_rn_q16[1] / 65536.0,

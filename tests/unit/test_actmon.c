@@ -97,6 +97,72 @@ START_TEST(test_tracking)
 }
 END_TEST
 
+/* Drives a stroke: the reference jumps from `from` to `to` deg at step 1
+ * (with the vote valid from step 0, or from the jump if `start_up`); the
+ * valve leaves `from` at `rate_mrad` per step (0: stuck) and stops at
+ * `to`. Returns the first step with the tracking symptom (0: none in
+ * `steps`). */
+static uint32_t stroke(int32_t from, int32_t to, int32_t rate_mrad, bool start_up, uint32_t steps)
+{
+  canfdi_actmon_in_t in = healthy();
+  canfdi_actmon_out_t out;
+  int32_t angle = CANFDI_Q16_DEG(from, 1);
+  const int32_t target = CANFDI_Q16_DEG(to, 1);
+  const int32_t d = CANFDI_Q16_MILLI(rate_mrad);
+  uint32_t k;
+  uint32_t first = 0U;
+  setup();
+  in.thr_angle_rad_q16 = angle;
+  in.thr_ref_rad_q16 = angle;
+  if (!start_up) {
+    (void)canfdi_actmon_step(&m, &in, &out);
+  }
+  in.thr_ref_rad_q16 = target;
+  for (k = 1U; (k <= steps) && (first == 0U); k++) {
+    (void)canfdi_actmon_step(&m, &in, &out);
+    if (out.thr_not_following) {
+      first = k;
+    }
+    if (target > angle) {
+      angle = ((target - angle) > d) ? (angle + d) : target;
+    } else {
+      angle = ((angle - target) > d) ? (angle - d) : target;
+    }
+    in.thr_angle_rad_q16 = angle;
+  }
+  return first;
+}
+
+/* A healthy valve does not lag a tip-in or tip-out of any size at the
+ * slowest slew it has in the envelope (14.6 rad/s on 9 V, 14.6 mrad per
+ * step), nor a start-up with the setpoint already at wide open; one
+ * stuck at the start of the stroke, or one slower than the expected
+ * trajectory (3 rad/s), is not following within ~0.3 s. */
+START_TEST(test_tracking_strokes)
+{
+  ck_assert_uint_eq(stroke(10, 80, 15, false, 3000U), 0U);
+  ck_assert_uint_eq(stroke(80, 10, 15, false, 3000U), 0U);
+  ck_assert_uint_eq(stroke(1, 88, 15, false, 3000U), 0U);
+  ck_assert_uint_eq(stroke(88, 1, 25, false, 3000U), 0U);
+  ck_assert_uint_eq(stroke(7, 80, 15, true, 3000U), 0U);
+  {
+    const uint32_t stuck = stroke(10, 80, 0, false, 3000U);
+    ck_assert_uint_gt(stuck, 20U);
+    ck_assert_uint_le(stuck, 300U);
+  }
+  {
+    const uint32_t stuck = stroke(80, 10, 0, false, 3000U);
+    ck_assert_uint_gt(stuck, 20U);
+    ck_assert_uint_le(stuck, 300U);
+  }
+  {
+    const uint32_t slow = stroke(10, 80, 3, false, 3000U);
+    ck_assert_uint_gt(slow, 20U);
+    ck_assert_uint_le(slow, 400U);
+  }
+}
+END_TEST
+
 /* Voltage applied, no current: an open motor circuit, at once; not with a
  * small command, not with an invalid current, not when de-energised. */
 START_TEST(test_no_current)
@@ -188,6 +254,9 @@ START_TEST(test_bad_arguments)
   canfdi_actmon_default_cfg(&bad);
   bad.uac_thr_V_q16 = 0;
   ck_assert_int_eq(canfdi_actmon_init(&m, &bad), -CANFDI_EINVAL);
+  canfdi_actmon_default_cfg(&bad);
+  bad.track_slew_rad_q16 = 0;
+  ck_assert_int_eq(canfdi_actmon_init(&m, &bad), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_actmon_init(&m, NULL), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_actmon_init(NULL, &cfg), -CANFDI_EINVAL);
   setup();
@@ -214,6 +283,7 @@ static Suite *make_suite(void)
   TCase *tc = tcase_create("monitors");
   tcase_add_test(tc, test_healthy_no_symptom);
   tcase_add_test(tc, test_tracking);
+  tcase_add_test(tc, test_tracking_strokes);
   tcase_add_test(tc, test_no_current);
   tcase_add_test(tc, test_uac);
   suite_add_tcase(s, tc);
