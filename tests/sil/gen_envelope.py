@@ -72,6 +72,8 @@ OUT_PENDING = SIL / "envelope_pending"
 T0 = gm.T0
 RAMP = gm.RAMP
 DT = 0.01                 # evaluation step of the observability conditions, s
+MOTION_WINDOW = 2.0       # the throttle's mechanical evidence counts as present when
+                          # this window holds the fast test's memory of motion, s
 SEED_BASE = 600           # file seeds of the sampled set (matrix uses 300..)
 BENCH_SEED_BASE = 1000    # file seeds of the bench's scenarios
 
@@ -97,7 +99,7 @@ POINTS_DCM = {
     "rev_brake": dict(lines=["speed const -100", "load const 1.2"],
                       what="reverse braking, -100 rad/s, load +1.2 N m"),
     "standstill": dict(lines=["speed const 0", "load const 0"],
-                       what="standstill, no load (the ECU's +-5 rad/s PRBS dithers through zero)"),
+                       what="standstill, no load (no test signal below 20 rad/s)"),
     "reversing": dict(lines=["speed sine 0 {dur} 60 0.1", "load const 1.2"], min_dur=12.0,
                       what="slow reversing sine 60 rad/s at 0.1 Hz through zero, +1.2 N m (all quadrants)"),
     "low_speed_high_load": dict(lines=["speed const 20", "load const 2.1"],
@@ -110,9 +112,9 @@ POINTS_DCM = {
 POINTS_THR = {
     "mid": dict(lines=THR_NOMINAL, nominal=True,
                 what="mid travel, 25 deg with the +-8 deg 0.5 Hz driver sine (the nominal point)"),
-    "closed": dict(lines=["angle const 1"], what="closed, 1 deg (the excitation reaches the stop)"),
+    "closed": dict(lines=["angle const 1"], what="closed, 1 deg (no test signal below 10 deg)"),
     "below_lh": dict(lines=["angle const 3.5"], what="below limp-home, 3.5 deg (limp-home 6.5 deg)"),
-    "wide_open": dict(lines=["angle const 85"], what="wide open, 85 deg"),
+    "wide_open": dict(lines=["angle const 85"], what="wide open, 85 deg (no test signal above 80 deg)"),
     "tip_in": dict(lines=["angle const 10", f"angle step {T0:g} 70"],
                    what="tip-in: 10 -> 80 deg step at the fault time"),
     "tip_out": dict(lines=["angle const 80", f"angle step {T0:g} -70"],
@@ -127,18 +129,6 @@ COMM_POINTS = {"dcm": ["fwd_motor", "rev_brake"], "thr": ["mid", "wide_open"]}
 # Sampled-set scenarios the firmware does not meet yet: key -> one line of
 # reason (observed on the current firmware).
 PENDING: dict[str, str] = {
-    "dcm_ia_sensor_offset_abrupt_low_speed_high_load":
-        "P1A20 named, then P1A21 (speed sensor) 2.4 s after the fault at 20 rad/s, 6.7 A (3 seeds)",
-    "thr_friction_up_abrupt_tip_in":
-        "the 10 -> 80 deg tip-in trips the jam monitor (P2119 29 ms after the step, thr fail_safe): "
-        "P0638 is never tested",
-    "thr_motor_r_up_abrupt_tip_out":
-        "the 80 -> 10 deg tip-out trips the jam monitor (P2119 29 ms after the step, thr fail_safe): "
-        "P2101 is never tested",
-    "thr_tps1_open_abrupt_tip_in":
-        "P0122 at 9 ms, and the tip-in step trips the jam monitor: P2119 29 ms after it",
-    "thr_tps1_short_abrupt_tip_out":
-        "P0123 at 9 ms, and the tip-out step trips the jam monitor: P2119 29 ms after it",
 }
 
 
@@ -193,11 +183,53 @@ def dcm_series(lines, dur):
     return out
 
 
+class ThrTestBursts:
+    """When the ECU's throttle test signal runs (diag/canfdi_testsched.h),
+    as far as the observability can count on it: the key-on burst at the
+    first enabled instant and a burst after test_lack of enabled operation
+    without motion of the valve's own (the estimator not excited), then a
+    rest during which the lack is not counted. Bursts on a symptom (NEED)
+    are not counted: the faults whose
+    isolation needs the valve to move (spring, friction, a jam) show no
+    symptom while it holds still."""
+
+    def __init__(self):
+        self.keyon, self.lack, self.left, self.rest = True, 0.0, 0.0, 0.0
+
+    def step(self, enabled, natural_motion):
+        """One DT: returns whether a burst runs (the firmware's phases: on,
+        rest on time whatever the enabling, idle counting the lack while
+        enabled)."""
+        if self.left > 0.0:
+            if enabled:
+                self.left -= DT
+                if self.left <= 1e-9:
+                    self.left, self.rest = 0.0, op.fw("test_rest")
+                return True
+            self.left, self.rest = 0.0, op.fw("test_rest")      # aborted
+            return False
+        if self.rest > 0.0:
+            self.rest -= DT
+            if self.rest <= 1e-9:
+                self.rest, self.lack = 0.0, 0.0
+            return False
+        if enabled:
+            if self.keyon:
+                self.keyon, self.left = False, op.fw("test_burst")
+                return True
+            self.lack = 0.0 if natural_motion else self.lack + DT
+            if self.lack >= op.fw("test_lack") - 1e-9:
+                self.lack, self.left = 0.0, op.fw("test_burst")
+                return True
+        return False
+
+
 def thr_series(lines, dur, t_jam_starts=()):
     """Quantities of a throttle point at every DT: the reference (setpoint
-    clamped to the controller's range plus the ECU's +-3 deg 2 Hz
-    excitation), the valve following it at most at the physical slew rate of
-    the supply, and `stuck_err` for a valve stuck at each time in t_jam_starts."""
+    clamped to the controller's range plus the ECU's +-3 deg 2 Hz test
+    signal while a burst runs, ThrTestBursts), the valve following it at
+    most at the physical slew rate of the supply, and `stuck_err` for a
+    valve stuck at each time in t_jam_starts."""
     sp = profile(lines, "angle", dur)
     supply = param(lines, "thr_supply_V", op.P["thr_supply_V"])
     slew = math.degrees(op.thr_slew_max(supply)) * DT
@@ -208,16 +240,23 @@ def thr_series(lines, dur, t_jam_starts=()):
     errs = []
     lh = op.P["thr_limp_home_deg"]
     band = op.fw("thr_limp_band_deg")
-    mem = int(round(op.fw("thr_fast_memory") / DT))
+    mem_s = op.fw("thr_fast_memory")
+    win_m = int(round(MOTION_WINDOW / DT))
     hold = op.fw("thr_holdoff")
+    run, last_d = 0.0, 0
     out, th = [], None
     jam = None
     starts = sorted(t_jam_starts)
     mv, mva = [], []
+    bursts = ThrTestBursts()
+    sp_prev = None
     for k in range(int(round(dur / DT)) + 1):
         t = k * DT
         th_sp = min(hi, max(lo, max(0.0, min(90.0, sp(t)))))
-        ref = th_sp + amp * math.sin(2 * math.pi * t / per)
+        natural = sp_prev is not None and abs(math.radians(th_sp - sp_prev)) / DT >= op.fw("thr_sign_band")
+        sp_prev = th_sp
+        test = bursts.step(op.thr_test_enabled(th_sp), natural)
+        ref = th_sp + (amp * math.sin(2 * math.pi * t / per) if test else 0.0)
         tgt = max(0.0, min(op.THR_MAX_DEG, ref))
         prev = th
         th = tgt if th is None else th + max(-slew, min(slew, tgt - th))
@@ -225,13 +264,20 @@ def thr_series(lines, dur, t_jam_starts=()):
         q = op.thr_point(th, 0.0, supply)
         q["th_sp"] = th_sp
         q["th_dot"] = w
-        # the fast test's memory holds one-way motion beyond the sign band
-        # for at least its hold-off (everywhere / outside the limp band)
+        q["test"] = 1 if test else 0
+        # the fast test learns from one-way motion beyond the sign band once
+        # it has lasted the hold-off (everywhere / outside the limp band);
+        # its estimate is held while the valve rests: "moving" when the
+        # last MOTION_WINDOW s hold the fast test's memory of such motion
         m = abs(w) >= op.fw("thr_sign_band")
-        mv.append(m)
-        mva.append(m and abs(th - lh) >= band)
-        q["moving"] = 1 if sum(mv[-mem:]) * DT >= hold - 1e-9 else 0
-        q["moving_away"] = 1 if sum(mva[-mem:]) * DT >= hold - 1e-9 else 0
+        d = 0 if not m else (1 if w > 0 else -1)
+        run = run + DT if (d != 0 and d == last_d) else (DT if d != 0 else 0.0)
+        last_d = d
+        learn = run >= hold - 1e-9
+        mv.append(learn)
+        mva.append(learn and abs(th - lh) >= band)
+        q["moving"] = 1 if sum(mv[-win_m:]) * DT >= mem_s - 1e-9 else 0
+        q["moving_away"] = 1 if sum(mva[-win_m:]) * DT >= mem_s - 1e-9 else 0
         if starts and t >= starts[0] - 1e-9:
             jam = th if prev is None else prev
             starts.pop(0)
@@ -258,9 +304,11 @@ def fault_on(mode, cls, dur):
 
 def classify(row, series, intervals, budget):
     """Longest unbroken stretch of each condition inside the fault-on
-    intervals against the budget -> isolable / observable / not_observable."""
+    intervals against the budget -> (isolable / observable / not_observable,
+    the time the first isolable stretch has lasted the budget or None)."""
     need = max(budget, DT) - 1e-9
     best = {"iso": 0.0, "obs": 0.0}
+    ready = None
     for a, b in intervals:
         run = {"iso": 0.0, "obs": 0.0}
         for t, q in series:
@@ -270,13 +318,15 @@ def classify(row, series, intervals, budget):
                 if op.evaluate(code, q):
                     run[key] += DT
                     best[key] = max(best[key], run[key])
+                    if key == "iso" and ready is None and run[key] >= need:
+                        ready = t + DT
                 else:
                     run[key] = 0.0
     if best["iso"] >= need:
-        return "isolable"
+        return "isolable", ready
     if best["obs"] >= need or best["iso"] >= need:
-        return "observable"
-    return "not_observable"
+        return "observable", None
+    return "not_observable", None
 
 
 def tolerated_codes(row, series, intervals):
@@ -334,13 +384,26 @@ def build_run(row, mode, sub, pname, obs_row, dtcs, seed):
     iv = fault_on(mode, cls, dur)
     series = (dcm_series(dcm_lines, dur) if sub == "dcm"
               else thr_series(thr_lines, dur, [a for a, _ in iv]))
-    klass = classify(obs_row, series, iv, budget)
+    klass, ready = classify(obs_row, series, iv, budget)
+    if klass != "isolable" and sub == "thr" and mode != "intermittent":
+        # a fault that needs the valve to move, at a point that holds it
+        # still, is found by the periodic test burst: run until one is over
+        dur_long = math.ceil(op.fw("test_burst") + op.fw("test_rest") + op.fw("test_lack")
+                             + max(budget, op.fw("test_burst"))) + 2.0
+        iv_long = fault_on(mode, cls, dur_long)
+        series_long = thr_series(thr_lines, dur_long, [a for a, _ in iv_long])
+        k2, r2 = classify(obs_row, series_long, iv_long, budget)
+        if k2 == "isolable":
+            dur, iv, series, klass, ready = dur_long, iv_long, series_long, k2, r2
     codes = [c for c in row["dtc"].split("+") if c] + gm.EXTRA_DTCS.get(name, ([], ""))[0]
     tol, tol_cond = tolerated_codes(obs_row, series, iv)
     for c in codes + tol:
         if c not in dtcs:
             raise SystemExit(f"gen_envelope: {c} ({name}) not in dbc/dtcs.csv")
     due = T0 + (RAMP if mode == "incipient" else 0.0) + budget
+    if ready is not None:
+        # isolable only once the condition has held its budget (a test burst)
+        due = max(due, ready)
     key = f"{name}_{mode}@{pname}"
     lines = [
         f"# {name}_{mode}_{pname}.scn -- generated by tests/sil/gen_envelope.py; do not edit.",

@@ -41,6 +41,13 @@ FW_SOURCE = {
     "dcm_speed_bw": r"w_cw = 100 rad/s",
     "dcm_speed_kp": r"speed_kp_A_s_rad_q16 = CANFDI_Q16\(192 \* 100, 33000\)",
     "dcm_cur_kp": r"cur_kp_V_A_q16 = CANFDI_Q16\(682 \* 5, 1000\)",
+    "dcm_test_w_min": r"dcm_w_min_rad_s_q16 = 20 \* CANFDI_Q16_ONE",
+    "dcm_test_w_max": r"dcm_w_max_rad_s_q16 = 350 \* CANFDI_Q16_ONE",
+    "thr_test_min_deg": r"thr_min_rad_q16 = CANFDI_Q16_DEG\(10, 1\)",
+    "thr_test_max_deg": r"thr_max_rad_q16 = CANFDI_Q16_DEG\(80, 1\)",
+    "test_burst": r"burst_steps = 2500U",
+    "test_lack": r"lack_steps = 60000U",
+    "test_rest": r"rest_steps = 10000U",
     "thr_sine": r"excite_thr\.sine_amp_q16 = CANFDI_Q16_MILLI\(52\)",
     "thr_sine_period": r"excite_thr\.sine_period_us = 500000U",
     "r1_band": r"CANFDI_Q16_MILLI\(80\),\s*/\* r1",
@@ -271,8 +278,42 @@ def test_classify_needs_the_budget():
     """A condition that holds for less than the budget does not count."""
     row = {"iso_code": op.compile_expr("abs(w) >= 10"), "obs_code": op.compile_expr("abs(w) >= 2")}
     series = [(k * ge.DT, {"w": 20.0 if k * ge.DT < 3.5 else 5.0}) for k in range(601)]
-    assert ge.classify(row, series, [(3.0, 6.0)], 0.4) == "isolable"
-    assert ge.classify(row, series, [(3.0, 6.0)], 0.6) == "observable"
+    klass, ready = ge.classify(row, series, [(3.0, 6.0)], 0.4)
+    assert klass == "isolable" and ready == pytest.approx(3.4)
+    assert ge.classify(row, series, [(3.0, 6.0)], 0.6) == ("observable", None)
     series = [(k * ge.DT, {"w": 0.0}) for k in range(601)]
-    assert ge.classify(row, series, [(3.0, 6.0)], 0.1) == "not_observable"
+    assert ge.classify(row, series, [(3.0, 6.0)], 0.1) == ("not_observable", None)
+
+
+def _burst_times(angle_lines, dur):
+    return [t for t, q in ge.thr_series(angle_lines, dur) if q["test"]]
+
+
+def test_test_burst_model_keyon_and_lack():
+    """The throttle's test signal in the observability model: the key-on
+    burst where the test is enabled, none where it is not (wide open),
+    and after a held setpoint a burst once the lack time has passed."""
+    held = _burst_times(["angle const 40"], 80.0)
+    assert held and min(held) < 1.0                      # key-on burst
+    late = [t for t in held if t > 5.0]
+    first = op.fw("test_burst") + op.fw("test_rest") + op.fw("test_lack")  # lack counts after the rest
+    assert late and first - 0.05 <= min(late) <= first + 0.05
+    assert max(late) - min(late) == pytest.approx(op.fw("test_burst"), abs=0.05)
+    assert _burst_times(["angle const 85"], 80.0) == []  # never enabled above 80 deg
+    # a driver sine of 8 deg at 0.5 Hz moves the valve itself: no lack burst
+    busy = _burst_times(["angle const 25", "angle sine 0 70 8 0.5"], 70.0)
+    assert busy and max(busy) < 3.0
+
+
+def test_periodic_test_gives_the_due_time():
+    """A fault that needs motion at a point that holds the valve still is
+    isolable only after the lack burst: the scenario runs long enough and
+    its expectation is due after the burst, not at the 1 s budget."""
+    faults, dtcs, obs = ge.read_catalogue()
+    row = next(r for r in faults if r["name"] == "thr_spring_weak")
+    r = ge.build_run(row, "abrupt", "thr", "tip_in", obs["thr_spring_weak"], dtcs, 1)
+    assert r["klass"] == "isolable"
+    assert r["due"] > ge.T0 + op.fw("test_lack") and r["dur"] > r["due"]
+    r = ge.build_run(row, "abrupt", "thr", "wide_open", obs["thr_spring_weak"], dtcs, 1)
+    assert r["klass"] == "not_observable"
     assert math.isclose(ge.DT, 0.01)
