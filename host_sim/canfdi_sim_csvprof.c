@@ -13,6 +13,8 @@
 /* Fields a line may have before it is certainly wrong (time + every
  * quantity, and some room to count a few too many). */
 #define MAX_FIELDS (CANFDI_SIM_CSV_N + 4U)
+/* A line buffer: at most CANFDI_SIM_CSV_LINE_MAX characters, CR, LF, NUL. */
+#define LINE_BUF (CANFDI_SIM_CSV_LINE_MAX + 3U)
 
 static const char *const q_names[CANFDI_SIM_CSV_N] = {"speed_rad_s", "angle_deg", "load_Nm",
                                                       "dcm_supply_V", "thr_supply_V"};
@@ -59,8 +61,8 @@ static bool is_space(char c)
   return (c == ' ') || (c == '\t') || (c == '\r') || (c == '\n');
 }
 
-/* The next line that is neither blank nor a comment, into buf (at least
- * CANFDI_SIM_CSV_LINE_MAX + 2 bytes). 1: a line; 0: end of file; <0: error
+/* The next line that is neither blank nor a comment, into buf (LINE_BUF
+ * bytes: the longest line, CRLF and the NUL). 1: a line; 0: end of file; <0: error
  * (message written). */
 static int next_line(reader_t *r, char *buf)
 {
@@ -70,7 +72,7 @@ static int next_line(reader_t *r, char *buf)
     size_t len;
     size_t i;
     const char *p;
-    if (fgets(buf, (int)(CANFDI_SIM_CSV_LINE_MAX + 2U), r->f) == NULL) {
+    if (fgets(buf, (int)LINE_BUF, r->f) == NULL) {
       if (ferror(r->f)) {
         rc = fail(r, false, "read error after line %u", r->line);
       }
@@ -251,7 +253,7 @@ static int parse_row(const canfdi_sim_csvprof_t *p, reader_t *r, char *line, int
 int canfdi_sim_csvprof_open(canfdi_sim_csvprof_t *p, const char *path, char *msg, size_t cap)
 {
   reader_t r;
-  char buf[CANFDI_SIM_CSV_LINE_MAX + 2U];
+  char buf[LINE_BUF];
   int rc = CANFDI_OK;
   int got;
   unsigned q;
@@ -327,7 +329,7 @@ int canfdi_sim_csvprof_open(canfdi_sim_csvprof_t *p, const char *path, char *msg
 static void refill(canfdi_sim_csvprof_t *p)
 {
   reader_t r;
-  char buf[CANFDI_SIM_CSV_LINE_MAX + 2U];
+  char buf[LINE_BUF];
   size_t n = 0U;
   int rc = CANFDI_OK;
 

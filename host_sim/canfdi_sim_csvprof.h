@@ -18,7 +18,8 @@
  * (the ranges of the scenario's profiles and `param`s, i.e. what the plant
  * and its sensors can represent). Fields are separated by commas, with
  * optional spaces or tabs around them; lines end in LF or CRLF and are at
- * most CANFDI_SIM_CSV_LINE_MAX characters of printable ASCII. Times are
+ * most CANFDI_SIM_CSV_LINE_MAX characters of printable ASCII (the line end
+ * not counted). Times are
  * rounded to whole microseconds; the first row is at 0 and every row is
  * later than the one before (a step is two rows 1 ms apart). Between rows
  * every quantity is interpolated linearly; after the last row it holds.
