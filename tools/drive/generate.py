@@ -162,6 +162,8 @@ class Profile:
     thr_supply_V: np.ndarray
     i_motor_A: np.ndarray
     u_needed_V: np.ndarray
+    force_N: np.ndarray               # tractive force on the motor's side (after the brakes' share)
+    grade: np.ndarray
     steps: list[int]                  # angle steps: between sample k and k + 1
     dense: np.ndarray                 # samples written at DT, not only every OUT_DT
     info: dict = field(default_factory=dict)
@@ -323,31 +325,51 @@ def motor_current(drv: Drive, w: np.ndarray, alpha: np.ndarray, load: np.ndarray
     return (drv.j_kgm2 * alpha + friction + load) / drv.psi_Vs
 
 
-def speed_scale(drv: Drive, veh: Vehicle, bus: Bus48, cycle: wltc.Cycle) -> tuple[float, float, float]:
-    """rad/s per m/s: the largest motor speed per vehicle speed at which the whole base cycle,
-    driven Drive.speed_scale_max faster up the steepest grade, needs at most voltage_headroom of
-    the bus voltage at every instant, with the battery as weak as at a cold start (lowest
-    open-circuit voltage, cold internal resistance) and the winding at its warmest.
-    Returns (scale, the force scale's reference |F| peak, the lowest bus voltage on that drive)."""
+def _reference(drv: Drive, veh: Vehicle, cycle: wltc.Cycle) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The reference drive of the speed mapping: the base cycle Drive.speed_scale_max faster, up
+    the steepest grade. Returns (v, a, load on the rated scale, the force scale's |F| peak)."""
     t = np.arange(0.0, cycle.duration_s + 1e-9, DT)
     v = pchip(np.arange(len(cycle.v_m_s), dtype=float), cycle.v_m_s, t) * drv.speed_scale_max
     a = np.gradient(v, DT)
     f = road_force(veh, v, a, np.full_like(v, veh.grade_max))
     f_peak = float(np.abs(f).max())
-    load = drv.torque_rated_Nm * f / f_peak
+    return v, a, drv.torque_rated_Nm * f / f_peak, f_peak
+
+
+def _reference_bus(drv: Drive, bus: Bus48, v: np.ndarray, a: np.ndarray, load: np.ndarray, k: float) -> np.ndarray:
+    """Bus voltage on the reference drive at speed scale k: the weak cold battery (lowest
+    open-circuit voltage, cold internal resistance) sagging with the motor's power."""
+    u_oc = bus.u_oc_cold[0]
+    i_m = motor_current(drv, k * v, k * a, load)
+    return u_oc - bus.r_int_cold_ohm * np.maximum((drv.psi_Vs * k * v + drv.ra_cold_ohm * i_m) * i_m / u_oc, 0.0)
+
+
+def reference_share(drv: Drive, veh: Vehicle, bus: Bus48, cycle: wltc.Cycle, k: float) -> float:
+    """The largest share of the bus voltage the reference drive needs at speed scale k, with the
+    warmest winding and the current's magnitude: psi w + R_hot (J |alpha| + M_F0 + M_F1 w + |M_L|) / psi."""
+    v, a, load, _ = _reference(drv, veh, cycle)
+    u = _reference_bus(drv, bus, v, a, load, k)
+    i_abs = (drv.j_kgm2 * k * np.abs(a) + drv.mf0_Nm + drv.mf1_Nms * k * v + np.abs(load)) / drv.psi_Vs
+    moving = v > 0.5
+    return float(((drv.psi_Vs * k * v + drv.ra_hot_ohm * i_abs)[moving] / u[moving]).max())
+
+
+def speed_scale(drv: Drive, veh: Vehicle, bus: Bus48, cycle: wltc.Cycle) -> tuple[float, float, float]:
+    """rad/s per m/s: the largest motor speed per vehicle speed at which the reference drive
+    (_reference) needs at most voltage_headroom of the bus voltage at every instant
+    (reference_share). Returns (scale, the force scale's |F| peak, the lowest bus voltage)."""
+    v, a, load, f_peak = _reference(drv, veh, cycle)
     moving = v > 0.5
     r = drv.ra_hot_ohm
-    u_oc = bus.u_oc_cold[0]
-    k = drv.voltage_headroom * u_oc / (drv.psi_Vs * float(v.max()))
-    u = np.full_like(v, u_oc)
-    for _ in range(20):    # the bus sags with the current the speed needs: a fixed point, reached in a few passes
-        i_m = motor_current(drv, k * v, k * a, load)
-        u = u_oc - bus.r_int_cold_ohm * np.maximum((drv.psi_Vs * k * v + drv.ra_cold_ohm * i_m) * i_m / u_oc, 0.0)
-        # psi w + R I <= headroom u, with w = k v and I = (J k a + mf0 + mf1 k v + load) / psi
+    k = drv.voltage_headroom * bus.u_oc_cold[0] / (drv.psi_Vs * float(v.max()))
+    u = _reference_bus(drv, bus, v, a, load, k)
+    for _ in range(50):    # the bus sags with the current the speed needs: a fixed point, reached in a few passes
+        u = _reference_bus(drv, bus, v, a, load, k)
+        # psi k v + R (J k |a| + mf0 + mf1 k v + |load|) / psi <= headroom u, solved for k per sample
         i_rest = (np.abs(load) + drv.mf0_Nm) / drv.psi_Vs
-        per_v = drv.psi_Vs + r * (drv.mf1_Nms + drv.j_kgm2 * np.abs(a) / np.maximum(v, 1e-9)) / drv.psi_Vs
-        k_new = float(((drv.voltage_headroom * u[moving] - r * i_rest[moving]) / (v[moving] * per_v[moving])).min())
-        if abs(k_new - k) < 1e-9:
+        per_k = drv.psi_Vs * v + r * (drv.mf1_Nms * v + drv.j_kgm2 * np.abs(a)) / drv.psi_Vs
+        k_new = float(((drv.voltage_headroom * u[moving] - r * i_rest[moving]) / per_k[moving]).min())
+        if abs(k_new - k) < 1e-12:
             break
         k = k_new
     return k, f_peak, float(u.min())
@@ -482,7 +504,7 @@ def generate(plan: Plan, veh: Vehicle = Vehicle(), drv: Drive = Drive(), bus: Bu
              if s0 > 0 and abs(angle[s0] - angle[s0 - 1]) > 1.0]
 
     u_needed = drv.psi_Vs * w + drv.ra_hot_ohm * i_m
-    prof = Profile(t, v, a, w, load, angle, u48, u12, i_m, u_needed, steps, dense)
+    prof = Profile(t, v, a, w, load, angle, u48, u12, i_m, u_needed, force, grade, steps, dense)
     prof.info = summary(prof, tr, plan, cycle, drv, k_w, k_t, f_peak, u_low, cranks, tip_ins, tip_outs,
                         a_tip, a_out, engine_off)
     check(prof, drv)
