@@ -182,3 +182,18 @@ def test_cli_writes_profile_and_summary(tmp_path: Path, capsys: pytest.CaptureFi
     with pytest.raises(SystemExit):
         main(["--columns", "rpm", "-o", str(out)])
     assert main(["--trips", "0", "-o", str(out)]) == 2
+    assert main(["--wot", "95", "-o", str(out)]) == 2
+
+
+def test_wot_and_angle_rate_options(tmp_path: Path) -> None:
+    """--wot moves a floored pedal below the end stop; --angle-rate turns the steps into ramps."""
+    base = ["--duration", "300", "--seed", "2", "--trips", "1", "-o"]
+    assert main(base + [str(tmp_path / "a.csv"), "--wot", "85"]) == 0
+    a = read(tmp_path / "a.csv")
+    assert max(a.columns["angle_deg"]) == 85.0 and _steps(a, "angle_deg", 20.0)
+    assert main(base + [str(tmp_path / "b.csv"), "--angle-rate", "300"]) == 0
+    b = read(tmp_path / "b.csv")
+    assert not _steps(b, "angle_deg", 1.0) and max(b.columns["angle_deg"]) == 90.0
+    ang, t = b.columns["angle_deg"], b.t_us
+    rate = max(abs(ang[i] - ang[i - 1]) / ((t[i] - t[i - 1]) * 1e-6) for i in range(1, len(t)))
+    assert rate <= 300.0 + 1e-6

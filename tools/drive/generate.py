@@ -119,7 +119,9 @@ class Throttle:
     idle_warm_deg: float = 4.0        # warm idle: below limp-home (6.5 deg)
     idle_cold_deg: float = 8.0        # cold idle: above limp-home
     tau_warm_s: float = 240.0         # engine warm-up
-    wot_deg: float = 90.0
+    wot_deg: float = 90.0             # wide open: the valve's end stop
+    rate_deg_s: float = 0.0           # > 0: the angle moves at most this fast (no steps)
+    dense_deg_per_sample: float = 0.5 # faster than this per DT, every sample goes into the file
     gamma: float = 1.5                # progressive pedal map
     tau_pedal_s: float = 0.25         # the driver's foot
     a_tip_in: tuple[float, float] = (0.9, 1.1)      # m/s^2: harder than this floors the pedal (seeded per drive)
@@ -502,6 +504,17 @@ def generate(plan: Plan, veh: Vehicle = Vehicle(), drv: Drive = Drive(), bus: Bu
     tip_outs = sorted(tip_outs + lifts)
     steps = [s0 - 1 for s0, _ in sorted(tip_ins + tip_outs)
              if s0 > 0 and abs(angle[s0] - angle[s0 - 1]) > 1.0]
+    if thr.rate_deg_s > 0.0:
+        # a rate-limited pedal (e.g. an ECU's filter): no steps, the angle ramps
+        step = thr.rate_deg_s * DT
+        for k in range(1, n):
+            angle[k] = angle[k - 1] + min(step, max(-step, angle[k] - angle[k - 1]))
+        steps = []
+
+    # where the angle moves fast (a release after a tip-in, a rate-limited step) every sample is
+    # written: a row every OUT_DT would turn the motion into a slower chord
+    fast = np.abs(np.diff(angle, prepend=angle[0])) > thr.dense_deg_per_sample
+    dense |= fast | np.roll(fast, -1)
 
     u_needed = drv.psi_Vs * w + drv.ra_hot_ohm * i_m
     prof = Profile(t, v, a, w, load, angle, u48, u12, i_m, u_needed, force, grade, steps, dense)
@@ -569,7 +582,7 @@ def summary(p: Profile, tr: _Track, plan: Plan, cycle: wltc.Cycle, drv: Drive, k
                    "angle_steps": len(p.steps)},
         "seconds": {"standstill": round(float(stand.sum() * DT), 1),
                     "reverse": round(float((p.v_m_s < -1e-6).sum() * DT), 1),
-                    "wide_open": round(float((p.angle_deg >= 89.9).sum() * DT), 1),
+                    "wide_open": round(float((p.angle_deg >= p.angle_deg.max() - 0.1).sum() * DT), 1),
                     "below_limp_home": round(float((p.angle_deg < 6.5).sum() * DT), 1),
                     "engine_off": round(float(engine_off.sum() * DT), 1)},
         "quadrants_s": {"forward_motoring": round(float(((p.speed_rad_s > 0.5) & (q > 0)).sum() * DT), 1),
@@ -590,8 +603,8 @@ FORMATS = ("%.3f", "%.4f", "%.3f", "%.3f", "%.3f")
 
 
 def rows(p: Profile) -> list[tuple[int, list[float]]]:
-    """(time in ms, values) of every row: every OUT_DT, every DT where the supplies move fast,
-    and each angle step as two rows STEP_S apart (the old value, then the new one)."""
+    """(time in ms, values) of every row: every OUT_DT, every DT where the supplies or the angle
+    move fast, and each angle step as two rows STEP_S apart (the old value, then the new one)."""
     n = len(p.t_s)
     every = int(round(OUT_DT / DT))
     idx = set(range(0, n, every)) | set(np.flatnonzero(p.dense).tolist()) | {n - 1}
@@ -653,11 +666,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--columns", type=_columns, default=COLUMNS, metavar="LIST",
                     help="write only these columns (default all: " + ",".join(COLUMNS) + "); the others stay "
                          "the scenario's own, e.g. the motor's side alone")
+    ap.add_argument("--wot", type=float, default=Throttle.wot_deg, metavar="DEG",
+                    help=f"the angle of a floored pedal (default {Throttle.wot_deg:g}: the valve's end stop)")
+    ap.add_argument("--angle-rate", type=float, default=0.0, metavar="DEG_PER_S",
+                    help="limit the angle's rate (default 0: none, tip-ins and tip-outs are steps); "
+                         "to tell a step's effect from the angle's")
     ap.add_argument("--summary", type=Path, metavar="JSON", help="write the summary here (default: CSV with .json)")
     a = ap.parse_args(argv)
     plan = Plan(duration_s=a.duration, seed=a.seed, trips=a.trips, manoeuvre_prob=a.manoeuvres)
+    if not (Throttle.idle_cold_deg < a.wot <= 90.0) or a.angle_rate < 0.0:
+        print(f"canfdi-drive-profile: --wot {a.wot:g} must be in ({Throttle.idle_cold_deg:g}, 90] and "
+              f"--angle-rate {a.angle_rate:g} not negative", file=sys.stderr)
+        return 2
     try:
-        p = generate(plan)
+        p = generate(plan, thr=Throttle(wot_deg=a.wot, rate_deg_s=a.angle_rate))
     except (ProfileError, wltc.CycleError) as e:
         print(f"canfdi-drive-profile: {e}", file=sys.stderr)
         return 2
