@@ -11,8 +11,9 @@
 #                        (tests/sil/pending/drive_wltc3_10min.scn): pending
 #                        until the firmware stops raising false codes on it,
 #                        so not in `make test`
-#   make drive-long      one hour per drive, several seeds, a -7 degC cold
-#                        start (tests/sil/drive/*.scn), release build; a bench
+#   make drive-long      ten one-hour drives, seeds 1..10, two of them -7 degC
+#                        cold starts (tests/sil/drive/*.scn), release build;
+#                        a bench (about 4 min on two cores)
 #
 # The motor's side of the 11.5-minute drive alone (the throttle held) runs
 # in `make sil-test` (tests/sil/scenarios/drive_dcm_10min.scn). The scenario
@@ -25,11 +26,10 @@ DRIVE_SRC := tools/drive/generate.py tools/drive/wltc.py requirements.txt
 DRIVE_SHORT := --duration 600 --seed 1 --trips 1,4,5,8 --manoeuvres 1
 DRIVE_ARGS_wltc3_10min_s1 := $(DRIVE_SHORT)
 DRIVE_ARGS_wltc3_10min_s1_dcm := $(DRIVE_SHORT) --columns speed_rad_s,load_Nm,dcm_supply_V
-DRIVE_ARGS_wltc3_1h_s1 := --duration 3600 --seed 1
-DRIVE_ARGS_wltc3_1h_s2 := --duration 3600 --seed 2
-DRIVE_ARGS_wltc3_1h_s3 := --duration 3600 --seed 3
-DRIVE_ARGS_wltc3_1h_s4 := --duration 3600 --seed 4
-DRIVE_NAMES := wltc3_10min_s1 wltc3_10min_s1_dcm wltc3_1h_s1 wltc3_1h_s2 wltc3_1h_s3 wltc3_1h_s4
+# one hour each, seeds 1..10 (ten simulated hours; 4 and 10 are the -7 degC cold starts)
+DRIVE_SEEDS := 1 2 3 4 5 6 7 8 9 10
+$(foreach s,$(DRIVE_SEEDS),$(eval DRIVE_ARGS_wltc3_1h_s$(s) := --duration 3600 --seed $(s)))
+DRIVE_NAMES := wltc3_10min_s1 wltc3_10min_s1_dcm $(DRIVE_SEEDS:%=wltc3_1h_s%)
 DRIVE_CSV := $(DRIVE_NAMES:%=$(DRIVE_DIR)/%.csv)
 
 $(DRIVE_DIR)/%.csv: $(DRIVE_SRC) | deps

@@ -45,7 +45,7 @@ Tests (`make test` runs those marked *)
   make sil-long             hours of simulated time, -O2 build (tests/sil/long)
   make drive-unit         * pytest tests/drive: the drive-profile generator, the plants following it
   make drive-test           the 11.5-minute WLTC drive in SIL, both plants (pending: false codes today)
-  make drive-long           1-hour WLTC drives, several seeds, a -7 degC cold start, -O2 build
+  make drive-long           ten 1-hour WLTC drives (seeds 1..10, two -7 degC cold starts), -O2 build
   make tools-test         * pytest tests/tools: canfdi-inject, -watch, -scenario, -plot
   make vcan-test          * the vcan sandbox's self-test (tools/vcan-run)
   make hil-test           * the HIL tests inside the sandbox (tests/hil, vcan tests of tests/sim)
