@@ -172,6 +172,16 @@ size_t canfdi_sim_clear_faults(canfdi_sim_t *sim, uint8_t id)
   return i;
 }
 
+void canfdi_sim_set_supply(canfdi_sim_t *sim, double dcm_supply_V, double thr_supply_V)
+{
+  CANFDI_ASSERT((sim != NULL) && (dcm_supply_V >= 0.0) && (dcm_supply_V <= span_max[CANFDI_SIM_S_DCM_SUPPLY]) &&
+                (thr_supply_V >= 0.0) && (thr_supply_V <= span_max[CANFDI_SIM_S_THR_SUPPLY]));
+  sim->cfg.dcm.supply_V = dcm_supply_V;
+  sim->cfg.thr.supply_V = thr_supply_V;
+  sim->dcm.p.supply_V = dcm_supply_V;
+  sim->thr.p.supply_V = thr_supply_V;
+}
+
 void canfdi_sim_step(canfdi_sim_t *sim, const canfdi_sim_in_t *in)
 {
   canfdi_sim_fx_t fx_now;

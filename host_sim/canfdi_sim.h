@@ -113,6 +113,14 @@ int canfdi_sim_add_fault(canfdi_sim_t *sim, const canfdi_sim_fault_spec_t *spec)
  * sim->fx change at the next step or resample. Cannot fail by contract. */
 size_t canfdi_sim_clear_faults(canfdi_sim_t *sim, uint8_t id);
 
+/* Sets the two bridge supplies (V; DC motor 0..80, throttle 0..16) from
+ * now on: the bridges clamp their output to them from the next step, and
+ * the supply sensors read them from the next sample. For a supply that
+ * varies over time (a scenario's profile) call it before every step with
+ * the value at the step's start: it holds over the step like the actuator
+ * commands. Out-of-range values are a contract violation (asserted). */
+void canfdi_sim_set_supply(canfdi_sim_t *sim, double dcm_supply_V, double thr_supply_V);
+
 /* One 1 ms step (see above). Cannot fail by contract. */
 void canfdi_sim_step(canfdi_sim_t *sim, const canfdi_sim_in_t *in);
 

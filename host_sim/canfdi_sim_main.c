@@ -191,6 +191,17 @@ static void summary(const canfdi_sim_scn_t *scn, const char *path)
     printf("  %zu ECU action(s) (cycle/clear/power_cycle): performed by the SIL rig only, "
            "ignored here\n", scn->n_actions);
   }
+  if (scn->has_profile) {
+    const canfdi_sim_csvprof_t *p = &scn->profile;
+    unsigned q;
+    printf("  profile %s: %u rows, 0 .. %.3f s\n", p->path, (unsigned)p->n_rows,
+           (double)p->t_last_us * 1e-6);
+    for (q = 0U; q < CANFDI_SIM_CSV_N; q++) {
+      if (p->has[q]) {
+        printf("    %-13s %g .. %g\n", canfdi_sim_csvprof_name(q), p->min[q], p->max[q]);
+      }
+    }
+  }
 }
 
 /* Options of the SocketCAN mode. */
@@ -365,6 +376,11 @@ static int run_can(const can_opts_t *o, canfdi_sim_scn_t *scn, canfdi_sim_t *sim
     }
     /* 1-2: setpoints (every 10 ms) and the plant's frames of t_k */
     n = canfdi_sim_rig_begin(&rig, fr);
+    if (canfdi_sim_scn_run_error(scn) != NULL) {
+      fprintf(stderr, "canfdi-sim: %s\n", canfdi_sim_scn_run_error(scn));
+      status = EXIT_FAILURE;
+      break;
+    }
     if (!o->realtime) {
       /* 3: SimStep(k) after them */
       canfdi_sim_rig_sim_step(&rig, &fr[n]);
@@ -698,7 +714,15 @@ int main(int argc, char **argv)
   for (k = 0U; (k < n_steps) && (status == EXIT_SUCCESS); k++) {
     const int64_t t_us = canfdi_sim_time_us(&sim);
     canfdi_sim_trace_sp_t sp;
+    double dcm_supply_V;
+    double thr_supply_V;
     canfdi_sim_scn_eval(&scn, t_us, &sp.speed_rad_s, &sp.angle_deg, &sp.load_Nm);
+    canfdi_sim_scn_supply(&scn, t_us, &dcm_supply_V, &thr_supply_V);
+    if (canfdi_sim_scn_run_error(&scn) != NULL) {
+      fprintf(stderr, "canfdi-sim: %s\n", canfdi_sim_scn_run_error(&scn));
+      status = EXIT_FAILURE;
+      break;
+    }
     canfdi_sim_refctl_step(&ctl, sp.speed_rad_s, sp.angle_deg, &sim.meas, &in);
     in.dcm.load_Nm = sp.load_Nm;
     if ((out != NULL) && ((k % decimate) == 0U) &&
@@ -715,6 +739,7 @@ int main(int argc, char **argv)
         }
       }
     }
+    canfdi_sim_set_supply(&sim, dcm_supply_V, thr_supply_V);
     canfdi_sim_step(&sim, &in);
     if (!quiet && ((k & 0x3FFU) == 0U)) {
       const double now = wall_s();

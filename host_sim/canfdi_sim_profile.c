@@ -124,7 +124,12 @@ static double comp_eval(canfdi_sim_profile_comp_t *c, int64_t t_us)
 
 double canfdi_sim_profile_eval(canfdi_sim_profile_t *p, int64_t t_us)
 {
-  double sum = 0.0;
+  return canfdi_sim_profile_eval_plus(p, t_us, 0.0);
+}
+
+double canfdi_sim_profile_eval_plus(canfdi_sim_profile_t *p, int64_t t_us, double extra)
+{
+  double sum = extra;
   size_t i;
   for (i = 0U; i < p->n; i++) {
     sum += comp_eval(&p->comp[i], t_us);

@@ -71,4 +71,8 @@ int canfdi_sim_profile_add(canfdi_sim_profile_t *p, uint8_t kind, double t0_s, d
 /* Value at t_us (not const: PRBS components cache their LFSR). */
 double canfdi_sim_profile_eval(canfdi_sim_profile_t *p, int64_t t_us);
 
+/* The sum of the components at t_us plus `extra` (e.g. a value read from
+ * a profile file), clamped to [lo, hi]. */
+double canfdi_sim_profile_eval_plus(canfdi_sim_profile_t *p, int64_t t_us, double extra);
+
 #endif /* CANFDI_SIM_PROFILE_H */

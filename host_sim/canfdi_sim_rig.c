@@ -19,6 +19,8 @@ int canfdi_sim_rig_init(canfdi_sim_rig_t *r, canfdi_sim_scn_t *scn, canfdi_sim_t
     r->scn = scn;
     r->sim = sim;
     r->in.dcm.bridge = (uint8_t)CANFDI_SIM_BRIDGE_A;
+    r->dcm_supply_V = sim->dcm.p.supply_V;
+    r->thr_supply_V = sim->thr.p.supply_V;
     canfdi_sim_frames_init(&r->frames, sim_mode);
   }
   return rc;
@@ -40,6 +42,7 @@ size_t canfdi_sim_rig_begin(canfdi_sim_rig_t *r, canfdi_sim_frame_t *out)
   /* The profiles are evaluated every step even while overridden: the
    * scenario's own state must not depend on the overrides. */
   canfdi_sim_scn_eval(r->scn, t_us, &r->sp.speed_rad_s, &r->sp.angle_deg, &r->sp.load_Nm);
+  canfdi_sim_scn_supply(r->scn, t_us, &r->dcm_supply_V, &r->thr_supply_V);
   if (r->ovr_dcm) {
     r->sp.speed_rad_s = canfdi_sim_msg_setpoint_dcm_sp_dcm_speed_decode(r->ovr_speed_raw);
     r->sp.load_Nm = canfdi_sim_msg_setpoint_dcm_sp_dcm_load_decode(r->ovr_load_raw);
@@ -214,5 +217,6 @@ void canfdi_sim_rig_end(canfdi_sim_rig_t *r)
 {
   CANFDI_ASSERT(r != NULL);
   r->in.dcm.load_Nm = r->sp.load_Nm;
+  canfdi_sim_set_supply(r->sim, r->dcm_supply_V, r->thr_supply_V);
   canfdi_sim_step(r->sim, &r->in);
 }

@@ -25,8 +25,10 @@
  *                          every 10 ms, and its SpDcmLoad becomes the plant
  *                          load. Other ids are counted and ignored.
  *   canfdi_sim_rig_end     plant load = the step's load (scenario or
- *                          override), canfdi_sim_step to t_k+1 with the
- *                          actuator inputs held.
+ *                          override), the plants' supplies = the scenario's
+ *                          at t_k (canfdi_sim_scn_supply; not overridable),
+ *                          canfdi_sim_step to t_k+1 with the actuator inputs
+ *                          held.
  * In lockstep the ECU's actuator frames of step k arrive between _begin and
  * _end (lag 1: the command of step k acts over (t_k, t_k+1], the sample at
  * t_k+1 shows it). canfdi_sim_rig_sim_step() builds SimStep(k) (0x611) for
@@ -99,6 +101,8 @@ typedef struct {
   canfdi_sim_frames_t frames;      /* E2E state of the sensor frames */
   canfdi_sim_in_t in;              /* actuator inputs in force (and the load of this step) */
   canfdi_sim_trace_sp_t sp;        /* setpoints and load of this step (after overrides) */
+  double dcm_supply_V;             /* the plants' supplies over this step (scenario) */
+  double thr_supply_V;
   bool ovr_dcm;                    /* an external SetpointDcm was received */
   int16_t ovr_speed_raw;           /* its raw SpDcmSpeed, resent as is */
   int16_t ovr_load_raw;            /* its raw SpDcmLoad */

@@ -542,6 +542,60 @@ static int do_action(parser_t *ps, char **tok, size_t n, uint8_t kind)
   return rc;
 }
 
+/* Appends src to the string in dst (capacity cap), cutting at the end. */
+static void append(char *dst, size_t cap, const char *src)
+{
+  size_t len = strlen(dst);
+  while ((*src != '\0') && ((len + 1U) < cap)) {
+    dst[len] = *src;
+    len++;
+    src++;
+  }
+  dst[len] = '\0';
+}
+
+/* profile <file.csv>: the path is taken from the scenario file's folder
+ * unless it is absolute; the file is checked whole here. */
+static int do_csv_profile(parser_t *ps, char **tok, size_t n)
+{
+  canfdi_sim_scn_t *scn = ps->scn;
+  char path[CANFDI_SIM_CSV_PATH_MAX];
+  char msg[sizeof ps->err->msg];
+  const char *slash = strrchr(ps->name, '/');
+  size_t dir_len = 0U;
+  int rc = want_args(ps, n, 2U, 2U, "profile <file.csv>");
+  if ((rc == CANFDI_OK) && scn->has_profile) {
+    rc = fail(ps, "duplicate profile (one file per scenario)");
+  }
+  if ((rc == CANFDI_OK) && (tok[1][0] != '/') && (slash != NULL)) {
+    dir_len = (size_t)(slash - ps->name) + 1U;
+  }
+  if ((rc == CANFDI_OK) && ((dir_len + strlen(tok[1]) + 1U) > sizeof path)) {
+    rc = fail(ps, "profile path longer than %u characters", CANFDI_SIM_CSV_PATH_MAX - 1U);
+  }
+  if (rc == CANFDI_OK) {
+    (void)memcpy(path, ps->name, dir_len);
+    (void)memcpy(&path[dir_len], tok[1], strlen(tok[1]) + 1U);
+    if (canfdi_sim_csvprof_open(&scn->profile, path, msg, sizeof msg) != CANFDI_OK) {
+      /* the profile file's own "<file>:<line>: ..." first, then this line
+       * (joined piece by piece: the whole is cut at the buffer's end) */
+      char where[32];
+      (void)snprintf(where, sizeof where, ":%u)", ps->line);
+      ps->err->msg[0] = '\0';
+      append(ps->err->msg, sizeof ps->err->msg, msg);
+      append(ps->err->msg, sizeof ps->err->msg, " (profile of ");
+      append(ps->err->msg, sizeof ps->err->msg, ps->name);
+      append(ps->err->msg, sizeof ps->err->msg, where);
+      ps->err->line = ps->line;
+      rc = -CANFDI_EINVAL;
+    } else {
+      scn->has_profile = true;
+      scn->profile_line = ps->line;
+    }
+  }
+  return rc;
+}
+
 static int do_line(parser_t *ps, char *line)
 {
   canfdi_sim_scn_t *scn = ps->scn;
@@ -694,9 +748,11 @@ static int do_line(parser_t *ps, char *line)
     rc = do_action(ps, tok, n, (uint8_t)CANFDI_SIM_ACT_CLEAR);
   } else if (strcmp(d, "power_cycle") == 0) {
     rc = do_action(ps, tok, n, (uint8_t)CANFDI_SIM_ACT_POWER_CYCLE);
+  } else if (strcmp(d, "profile") == 0) {
+    rc = do_csv_profile(ps, tok, n);
   } else {
     rc = fail(ps, "unknown directive '%s' (duration, seed, noise, init, param, speed, angle, "
-                  "load, fault, expect, cycle, clear, power_cycle)", d);
+                  "load, profile, fault, expect, cycle, clear, power_cycle)", d);
   }
   return rc;
 }
@@ -731,6 +787,33 @@ static void parser_init(parser_t *ps, canfdi_sim_scn_t *scn, const char *name,
   scn_defaults(scn);
 }
 
+/* The profile file against the rest of the scenario: it reaches the end,
+ * and no supply is given twice. */
+static int finish_profile(parser_t *ps)
+{
+  canfdi_sim_scn_t *scn = ps->scn;
+  const canfdi_sim_csvprof_t *pr = &scn->profile;
+  static const unsigned supply_q[2] = {CANFDI_SIM_CSV_DCM_SUPPLY, CANFDI_SIM_CSV_THR_SUPPLY};
+  int rc = CANFDI_OK;
+  size_t i;
+  size_t k;
+  ps->line = scn->profile_line;
+  if (((double)pr->t_last_us * 1e-6) < scn->duration_s) {
+    rc = fail(ps, "profile %s ends at %g s, before the end of the scenario (duration %g s)",
+              pr->path, (double)pr->t_last_us * 1e-6, scn->duration_s);
+  }
+  for (i = 0U; (rc == CANFDI_OK) && (i < 2U); i++) {
+    const char *name = canfdi_sim_csvprof_name(supply_q[i]);
+    for (k = 0U; k < N_PARAMS; k++) {
+      if (pr->has[supply_q[i]] && ps->has_param[k] && (strcmp(params[k].name, name) == 0)) {
+        rc = fail(ps, "profile %s has a %s column and the scenario sets param %s: give the supply "
+                      "once", pr->path, name, name);
+      }
+    }
+  }
+  return rc;
+}
+
 /* Checks that need the whole file. */
 static int finish(parser_t *ps)
 {
@@ -761,6 +844,9 @@ static int finish(parser_t *ps)
       ps->line = scn->expects[i].line;
       rc = fail(ps, "expectation after the end of the scenario (duration %g s)", scn->duration_s);
     }
+  }
+  if ((rc == CANFDI_OK) && scn->has_profile) {
+    rc = finish_profile(ps);
   }
   if ((rc == CANFDI_OK) && (canfdi_sim_init(&probe, &scn->cfg) != CANFDI_OK)) {
     ps->line = 0U;
@@ -843,8 +929,17 @@ int canfdi_sim_scn_load(canfdi_sim_scn_t *scn, const char *path, canfdi_sim_scn_
 
 int canfdi_sim_scn_setup(const canfdi_sim_scn_t *scn, canfdi_sim_t *sim)
 {
-  int rc = canfdi_sim_init(sim, &scn->cfg);
+  canfdi_sim_cfg_t cfg = scn->cfg;
+  int rc;
   size_t i;
+  /* the plants start with the profile's supplies at t = 0 (its first row) */
+  if (scn->has_profile && scn->profile.has[CANFDI_SIM_CSV_DCM_SUPPLY]) {
+    cfg.dcm.supply_V = scn->profile.first[CANFDI_SIM_CSV_DCM_SUPPLY];
+  }
+  if (scn->has_profile && scn->profile.has[CANFDI_SIM_CSV_THR_SUPPLY]) {
+    cfg.thr.supply_V = scn->profile.first[CANFDI_SIM_CSV_THR_SUPPLY];
+  }
+  rc = canfdi_sim_init(sim, &cfg);
   if (rc == CANFDI_OK) {
     const double w = scn->has_init[CANFDI_SIM_INIT_DCM_SPEED] ? scn->init[CANFDI_SIM_INIT_DCM_SPEED] : 0.0;
     const double ia = scn->has_init[CANFDI_SIM_INIT_DCM_CURRENT] ? scn->init[CANFDI_SIM_INIT_DCM_CURRENT] : 0.0;
@@ -867,7 +962,29 @@ int canfdi_sim_scn_setup(const canfdi_sim_scn_t *scn, canfdi_sim_t *sim)
 void canfdi_sim_scn_eval(canfdi_sim_scn_t *scn, int64_t t_us, double *speed_rad_s,
                          double *angle_deg, double *load_Nm)
 {
-  *speed_rad_s = canfdi_sim_profile_eval(&scn->speed, t_us);
-  *angle_deg = canfdi_sim_profile_eval(&scn->angle, t_us);
-  *load_Nm = canfdi_sim_profile_eval(&scn->load, t_us);
+  double v[CANFDI_SIM_CSV_N] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  if (scn->has_profile) {
+    canfdi_sim_csvprof_eval(&scn->profile, t_us, v);
+  }
+  *speed_rad_s = canfdi_sim_profile_eval_plus(&scn->speed, t_us, v[CANFDI_SIM_CSV_SPEED]);
+  *angle_deg = canfdi_sim_profile_eval_plus(&scn->angle, t_us, v[CANFDI_SIM_CSV_ANGLE]);
+  *load_Nm = canfdi_sim_profile_eval_plus(&scn->load, t_us, v[CANFDI_SIM_CSV_LOAD]);
+}
+
+void canfdi_sim_scn_supply(canfdi_sim_scn_t *scn, int64_t t_us, double *dcm_supply_V,
+                           double *thr_supply_V)
+{
+  double v[CANFDI_SIM_CSV_N] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  v[CANFDI_SIM_CSV_DCM_SUPPLY] = scn->cfg.dcm.supply_V;
+  v[CANFDI_SIM_CSV_THR_SUPPLY] = scn->cfg.thr.supply_V;
+  if (scn->has_profile) {
+    canfdi_sim_csvprof_eval(&scn->profile, t_us, v);
+  }
+  *dcm_supply_V = v[CANFDI_SIM_CSV_DCM_SUPPLY];
+  *thr_supply_V = v[CANFDI_SIM_CSV_THR_SUPPLY];
+}
+
+const char *canfdi_sim_scn_run_error(const canfdi_sim_scn_t *scn)
+{
+  return (scn->has_profile && (scn->profile.err[0] != '\0')) ? scn->profile.err : NULL;
 }

@@ -16,6 +16,8 @@
  *   speed|angle|load prbs <t0> <t1> <amplitude> <bit_s> <seed>
  *   speed|angle|load sine <t0> <t1> <amplitude> <freq_hz>
  *   load fan <k_Nms>                          speed-proportional load
+ *   profile <file.csv>                        time profile of speed, angle, load
+ *                                             and the two supplies (canfdi_sim_csvprof.h)
  *   fault <t_start> <name> <mode> <magnitude> [<ramp_s> | <period_s> <duty>]
  *   cycle <t>                                 ECU: operation cycle ends, a new one starts
  *   clear <t> [<code>|all]                    ECU: ClearDiagnosticInformation
@@ -32,10 +34,20 @@
  * rejected with "<file>:<line>: <message>" in err->msg; parsing stops at the
  * first error. Lines longer than CANFDI_SIM_SCN_LINE_MAX are errors.
  *
- * Cost: parsing is O(file size). Memory: sizeof(canfdi_sim_scn_t) ~ 17 kB
- * (three profiles, CANFDI_SIM_MAX_FAULTS faults, CANFDI_SIM_SCN_MAX_EXPECT
- * expectations, CANFDI_SIM_SCN_MAX_ACTIONS actions), caller-owned; the file is read line by line into a stack
- * buffer. No heap.
+ * `profile <file.csv>` (at most once; a relative path is taken from the
+ * scenario file's folder) adds the file's speed, angle and load columns to
+ * those profiles (the sum is clamped as before) and makes its supply
+ * columns the plants' supplies over time (canfdi_sim_scn_supply; a supply
+ * column and `param <that supply>` exclude each other). The file is
+ * checked whole when the scenario is parsed and must reach the end of the
+ * scenario; it is read again in blocks while the scenario is evaluated
+ * (canfdi_sim_csvprof.h), so a run checks canfdi_sim_scn_run_error.
+ *
+ * Cost: parsing is O(file size) (the scenario and its profile file).
+ * Memory: sizeof(canfdi_sim_scn_t) ~ 22 kB (three profiles, the CSV
+ * profile's block, CANFDI_SIM_MAX_FAULTS faults, CANFDI_SIM_SCN_MAX_EXPECT
+ * expectations, CANFDI_SIM_SCN_MAX_ACTIONS actions), caller-owned; the
+ * files are read line by line into stack buffers. No heap.
  */
 #ifndef CANFDI_SIM_SCENARIO_H
 #define CANFDI_SIM_SCENARIO_H
@@ -45,6 +57,7 @@
 #include <stdint.h>
 
 #include "canfdi_sim.h"
+#include "canfdi_sim_csvprof.h"
 #include "canfdi_sim_profile.h"
 
 #define CANFDI_SIM_SCN_LINE_MAX 256U
@@ -117,6 +130,9 @@ typedef struct {
   size_t n_expects;
   canfdi_sim_action_t actions[CANFDI_SIM_SCN_MAX_ACTIONS]; /* non-decreasing t_us */
   size_t n_actions;
+  bool has_profile;                /* a `profile` line was given */
+  unsigned profile_line;
+  canfdi_sim_csvprof_t profile;    /* its file (path resolved against the scenario's folder) */
 } canfdi_sim_scn_t;
 
 /* Name of a CANFDI_SIM_FF_* signal; "?" if out of range. */
@@ -139,5 +155,16 @@ int canfdi_sim_scn_setup(const canfdi_sim_scn_t *scn, canfdi_sim_t *sim);
 /* Setpoints and load at t_us. */
 void canfdi_sim_scn_eval(canfdi_sim_scn_t *scn, int64_t t_us, double *speed_rad_s,
                          double *angle_deg, double *load_Nm);
+
+/* The plants' supplies at t_us: the profile's supply columns where it has
+ * them, else the constant parameters (cfg.dcm.supply_V, cfg.thr.supply_V).
+ * Apply them with canfdi_sim_set_supply before the step from t_us. */
+void canfdi_sim_scn_supply(canfdi_sim_scn_t *scn, int64_t t_us, double *dcm_supply_V,
+                           double *thr_supply_V);
+
+/* NULL while the run is fine; else the profile file's read error during
+ * the run ("<file>:<line>: ..."; canfdi_sim_csvprof.h). The values hold
+ * from that point: a runner stops and reports it. */
+const char *canfdi_sim_scn_run_error(const canfdi_sim_scn_t *scn);
 
 #endif /* CANFDI_SIM_SCENARIO_H */

@@ -47,6 +47,9 @@ Tests (`make test` runs those marked *)
   make sil-envelope       * faults away from the nominal point (tests/sil/envelope), oppoint checks
   make sil-envelope-pending the envelope scenarios that do not pass yet
   make sil-long             hours of simulated time, -O2 build (tests/sil/long)
+  make drive-unit         * pytest tests/drive: the drive-profile generator, the plants following it
+  make drive-test           the 11.5-minute WLTC drive in SIL, both plants (pending: false codes today)
+  make drive-long           ten 1-hour WLTC drives (seeds 1..10, two -7 degC cold starts), -O2 build
   make tools-test         * pytest tests/tools: canfdi-inject, -watch, -scenario, -plot
   make vcan-test          * the vcan sandbox's self-test (tools/vcan-run)
   make hil-test           * the HIL tests inside the sandbox (tests/hil, vcan tests of tests/sim)
@@ -62,6 +65,10 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
   make bench-pil            PIL figures incl. the demo, and the RLS update vs textbook float/double/FPU
+
+Drive profiles (docs/driving.md)
+  make drive-profiles       the WLTC class 3 drive profiles, $(BUILD)/drive/*.csv (+ .json summaries)
+  make drive-plot           $(BUILD)/drive/wltc3_10min_s1.png: the 10-minute profile over time
 
 Code
   make dbc-gen              regenerate the C codecs and tables after editing dbc/

@@ -35,11 +35,13 @@ BENCH_STEPS += bench-hil
 # The SIL twins of the scenarios tests/hil/test_scenarios.py compares frame
 # by frame (SHARED there) are made here on the host: canfdi-sil is an ASan
 # build, which cannot run in the sandbox.
-HIL_SHARED := tps1_open dcm_ra_up bridge_a_dead tps_both_lost
+HIL_SHARED := tps1_open dcm_ra_up bridge_a_dead tps_both_lost supply_profile
 HIL_SIL_LOGS := $(HIL_SHARED:%=$(BUILD)/hil/test/%-sil.log)
 $(BUILD)/hil/test/%-sil.log: tests/sil/scenarios/%.scn $(BUILD)/bin/canfdi-sil
 	@mkdir -p $(@D)
 	@$(BUILD)/bin/canfdi-sil -q -s $< -l $@ >/dev/null
+# a scenario's profile file (`profile`) is part of it
+$(BUILD)/hil/test/supply_profile-sil.log: tests/sil/scenarios/supply_profile.csv
 
 .PHONY: hil-test hil
 hil-test: deps $(HIL_BINS) $(HIL_SIL_LOGS)

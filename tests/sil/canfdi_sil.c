@@ -640,6 +640,10 @@ int main(int argc, char **argv)
     }
     /* the vehicle's setpoints (every 10 ms) and the plant's frames */
     npf = canfdi_sim_rig_begin(&rig, pf);
+    if (canfdi_sim_scn_run_error(&scn) != NULL) {
+      fprintf(stderr, "canfdi-sil: %s\n", canfdi_sim_scn_run_error(&scn));
+      return EXIT_USAGE;
+    }
     for (j = 0U; j < npf; j++) {
       if (ecu_filter_passes(pf[j].id)) {
         (void)canfdi_app_rx_frame(&app, pf[j].id, pf[j].data, pf[j].dlc, now_us);

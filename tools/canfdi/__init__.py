@@ -9,10 +9,13 @@ Modules:
   logio          tolerant reading of recorded logs (candump .log and can.LogReader)
   timeline       frames -> diagnostic events on simulated time
   scenario_file  duration/fault/expect lines of a scenario (host_sim/SCENARIO.md)
+  profile_csv    profile files (`profile <file.csv>`): read and checked like the simulator
+  profile_plot   PNG of a profile file
   expect         canfdi-sil's judgement of expect lines, on a timeline
   hil            ECU/sim processes and the bus recorder of a HIL run
 Console commands: canfdi-inject (inject), canfdi-watch (watch),
-canfdi-scenario (scenario_run), canfdi-plot (logplot).
+canfdi-scenario (scenario_run), canfdi-plot (logplot), canfdi-profile-plot
+(profile_plot).
 """
 from pathlib import Path
 

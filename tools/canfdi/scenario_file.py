@@ -1,11 +1,12 @@
 """The parts of a scenario file (host_sim/SCENARIO.md) the Python tools need.
 
 The C parser (``canfdi-sim --check -s FILE``) is the authority on the whole
-format; this reader takes only ``duration``, ``seed``, ``fault``, ``expect``
-and the ECU-side actions ``cycle``, ``clear`` and ``power_cycle`` (which only
-the SIL rig performs: ``Scenario.sil_only`` names them), checks what it takes
-with the same file:line messages, and accepts every other known directive
-without looking at it. ``check_with_c``
+format; this reader takes only ``duration``, ``seed``, ``fault``, ``expect``,
+the ECU-side actions ``cycle``, ``clear`` and ``power_cycle`` (which only
+the SIL rig performs: ``Scenario.sil_only`` names them) and ``profile``
+(whose CSV file it reads and checks with canfdi.profile_csv, the C reader's
+twin), checks what it takes with the same file:line messages, and accepts
+every other known directive without looking at it. ``check_with_c``
 runs the C parser too when it has been built, so a file the HIL tools accept
 is never one the simulator would refuse.
 
@@ -21,10 +22,12 @@ from pathlib import Path
 
 from . import REPO_ROOT
 from .catalogue import MODES, dtc_by_code, fault_by_name
+from .profile_csv import SUPPLIES, Profile, ProfileError
+from .profile_csv import read as read_profile
 
 MAX_DURATION_S = 100000.0
-DIRECTIVES = ("duration", "seed", "noise", "init", "param", "speed", "angle", "load", "fault", "expect",
-              "cycle", "clear", "power_cycle")
+DIRECTIVES = ("duration", "seed", "noise", "init", "param", "speed", "angle", "load", "profile", "fault",
+              "expect", "cycle", "clear", "power_cycle")
 ACTIONS = ("cycle", "clear", "power_cycle")
 # expect dtc_status bit names, bit 0 first (ISO 14229-1 DTC status byte)
 STATUS_BITS = ("TF", "TFTOC", "PDTC", "CDTC", "TNCSLC", "TFSLC", "TNCTOC", "WIR")
@@ -89,6 +92,8 @@ class Scenario:
     faults: list[FaultLine] = field(default_factory=list)
     expects: list[Expect] = field(default_factory=list)
     actions: list[Action] = field(default_factory=list)
+    profile: Profile | None = None   # the `profile` file, read and checked
+    profile_line: int = 0
 
     @property
     def sil_only(self) -> list[str]:
@@ -254,6 +259,14 @@ def _action(where: str, n: int, tok: list[str], prev: list[Action]) -> Action:
     return a
 
 
+def _profile_path(scn_path: Path, tok: str) -> Path:
+    """The C parser's join: the scenario's folder (as written) + a relative path."""
+    text = str(scn_path)
+    if tok.startswith("/") or "/" not in text:
+        return Path(tok)
+    return Path(text[:text.rindex("/") + 1] + tok)
+
+
 def parse(path: Path) -> Scenario:
     """Read a scenario; ScenarioError 'file:line: reason' on the first problem."""
     try:
@@ -262,6 +275,7 @@ def parse(path: Path) -> Scenario:
         raise ScenarioError(f"{path}: cannot read: {e}") from None
     scn = Scenario(path)
     have_duration = False
+    params: set[str] = set()
     for n, raw in enumerate(text.splitlines(), 1):
         where = f"{path}:{n}"
         tok = raw.split("#", 1)[0].split()
@@ -285,6 +299,19 @@ def parse(path: Path) -> Scenario:
             scn.expects.append(_expect(where, n, tok))
         elif d in ACTIONS:
             scn.actions.append(_action(where, n, tok, scn.actions))
+        elif d == "param" and len(tok) == 3:
+            params.add(tok[1])
+        elif d == "profile":
+            if len(tok) != 2:
+                raise ScenarioError(f"{where}: too {'few' if len(tok) < 2 else 'many'} arguments to "
+                                    "'profile <file.csv>' (usage: profile <file.csv>)")
+            if scn.profile is not None:
+                raise ScenarioError(f"{where}: duplicate profile (one file per scenario)")
+            try:
+                scn.profile = read_profile(_profile_path(path, tok[1]))
+            except ProfileError as e:
+                raise ScenarioError(f"{e} (profile of {where})") from None
+            scn.profile_line = n
     if not have_duration:
         raise ScenarioError(f"{path}: no duration (required)")
     for f in scn.faults:
@@ -298,6 +325,16 @@ def parse(path: Path) -> Scenario:
         if e.t_s > scn.duration_s:
             raise ScenarioError(f"{path}:{e.line}: expectation after the end of the scenario "
                                 f"(duration {scn.duration_s:g} s)")
+    if scn.profile is not None:
+        where = f"{path}:{scn.profile_line}"
+        p = scn.profile
+        if p.t_last_us * 1e-6 < scn.duration_s:
+            raise ScenarioError(f"{where}: profile {p.path} ends at {p.t_last_us * 1e-6:g} s, before the end of "
+                                f"the scenario (duration {scn.duration_s:g} s)")
+        for name in SUPPLIES:
+            if name in p.columns and name in params:
+                raise ScenarioError(f"{where}: profile {p.path} has a {name} column and the scenario sets param "
+                                    f"{name}: give the supply once")
     return scn
 
 
