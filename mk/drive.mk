@@ -8,7 +8,8 @@
 #   make drive-unit      pytest tests/drive: the generator, and the plants
 #                        following its profile (part of `make test`)
 #   make drive-test      the 11.5-minute drive, both plants, expect no_dtc
-#                        (tests/sil/pending/drive_wltc3_10min.scn): pending
+#                        (tests/sil/scenarios/drive_wltc3_10min.scn, also in
+#                        make sil-test)
 #                        until the firmware stops raising false codes on it,
 #                        so not in `make test`
 #   make drive-long      ten one-hour drives, seeds 1..10, two of them -7 degC
@@ -50,11 +51,10 @@ drive-unit: deps $(BUILD)/bin/canfdi-sim $(DRIVE_DIR)/wltc3_10min_s1.csv
 TEST_STEPS += drive-unit
 
 drive-test: $(BUILD)/bin/canfdi-sil drive-profiles
-	@bash tests/sil/run_scenarios.sh $(BUILD)/bin/canfdi-sil tests/sil/pending/drive_wltc3_10min.scn
+	@bash tests/sil/run_scenarios.sh $(BUILD)/bin/canfdi-sil tests/sil/scenarios/drive_wltc3_10min.scn
 
 drive-long: $(BUILD)/bench/canfdi-sil-rel drive-profiles
 	@bash tests/sil/run_scenarios.sh $(BUILD)/bench/canfdi-sil-rel $(sort $(wildcard tests/sil/drive/*.scn))
 
 # scenarios that drive a profile need it made first
-sil-test: $(DRIVE_DIR)/wltc3_10min_s1_dcm.csv
-sil-pending: $(DRIVE_DIR)/wltc3_10min_s1.csv
+sil-test: $(DRIVE_DIR)/wltc3_10min_s1_dcm.csv $(DRIVE_DIR)/wltc3_10min_s1.csv

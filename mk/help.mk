@@ -48,7 +48,7 @@ Tests (`make test` runs those marked *)
   make sil-envelope-pending the envelope scenarios that do not pass yet
   make sil-long             hours of simulated time, -O2 build (tests/sil/long)
   make drive-unit         * pytest tests/drive: the drive-profile generator, the plants following it
-  make drive-test           the 11.5-minute WLTC drive in SIL, both plants (pending: false codes today)
+  make drive-test           the 11.5-minute WLTC drive in SIL, both plants (also in sil-test)
   make drive-long           ten 1-hour WLTC drives (seeds 1..10, two -7 degC cold starts), -O2 build
   make tools-test         * pytest tests/tools: canfdi-inject, -watch, -scenario, -plot
   make vcan-test          * the vcan sandbox's self-test (tools/vcan-run)
