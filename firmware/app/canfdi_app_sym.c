@@ -155,7 +155,10 @@ static void residuals(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 }
 
 /* RAX (canfdi_symptoms.h): (R_A,est - R_A,model) I_A / r1 / 0.5 while |r1|
- * is beyond its threshold, 0 while r1 is in band (nothing to explain);
+ * is RAX_MIN_RN times its threshold or more, 0 while r1 is in band
+ * (nothing to explain), not valid in between (an incipient R_A rise first
+ * crosses the r1 band while its estimate is still inside its spread: a
+ * "not explained" there would name a speed offset);
  * valid while the armature estimate has converged and is fed. Scaling: the
  * model's R_A is Q24, taken to Q16.16; dR x I in Q16.16 V (rounded,
  * saturated); the quotient by r1 in Q16.16 times 2. */
@@ -166,12 +169,19 @@ static void dcm_rax(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   s->dcm_rax_q16 = 0;
   if ((pd != NULL) && in->dcm_in_ok && in->dcm_est_on && canfdi_est_dcm_arm_converged(e) &&
       ((pd->valid & 1U) != 0U) && (pd->thr_q16[0] > 0)) {
-    if (canfdi_q31_abs(pd->r_q16[0]) >= pd->thr_q16[0]) {
+    const int32_t a = canfdi_q31_abs(pd->r_q16[0]);
+    if (a < pd->thr_q16[0]) {
+      s->flags |= CANFDI_SYM_F_DCM_RAX_VALID; /* nothing to explain */
+    } else if (a >= canfdi_mul_s32_qn(pd->thr_q16[0], (int32_t)CANFDI_APP_SYM_RAX_MIN_RN * CANFDI_Q16_ONE, 16U)) {
       const int32_t dr = canfdi_sub_s32_sat(canfdi_est_dcm_ra_q16(e), pd->ra_hat_ohm_q24 / 256);
       const int32_t du = canfdi_mul_s32_qn(dr, in->dcm_i_A_q16, 16U);
       s->dcm_rax_q16 = canfdi_mul_s32_qn(canfdi_div_s32_qn(du, pd->r_q16[0], 16U), 2 * CANFDI_Q16_ONE, 16U);
+      s->flags |= CANFDI_SYM_F_DCM_RAX_VALID;
+    } else {
+      /* r1 beyond its band by less than RAX_MIN_RN bands: an R_A change
+       * this small is inside the estimate's own spread, so the estimate
+       * can neither claim nor exclude it (not valid: '?') */
     }
-    s->flags |= CANFDI_SYM_F_DCM_RAX_VALID;
   }
 }
 

@@ -62,6 +62,12 @@
 #include "model/canfdi_parity_dcm.h"
 #include "model/canfdi_parity_thr.h"
 
+/* RAX is judged (valid) once |r1| is this many times its threshold: 3
+ * bands of r1 (0.24 V + 30 mOhm |I|) are an R_A change of 6 % at 4 A, past
+ * the spread of a fresh armature estimate; below that the estimate can
+ * neither claim nor exclude R_A. */
+#define CANFDI_APP_SYM_RAX_MIN_RN 3
+
 typedef struct {
   int32_t dcm_w_on_rad_s_q16;   /* > 0: |w| at which the speed's sign counts */
   int32_t dcm_i_on_A_q16;       /* > 0: |I_A| at which the current's sign counts */
