@@ -264,7 +264,8 @@ def thr_series(lines, dur, t_jam_starts=()):
         q = op.thr_point(th, 0.0, supply)
         q["th_sp"] = th_sp
         q["th_dot"] = w
-        q["test"] = 1 if test else 0
+        q["test"] = 1 if op.thr_test_enabled(th_sp) else 0
+        q["burst"] = 1 if test else 0
         # the fast test learns from one-way motion beyond the sign band once
         # it has lasted the hold-off (everywhere / outside the limp band);
         # its estimate is held while the valve rests: "moving" when the

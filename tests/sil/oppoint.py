@@ -268,7 +268,8 @@ VARS = {
     "I": "armature current, A (steady state)",
     "I_rms": "RMS armature current with the ECU's PRBS test signal where it is enabled, A",
     "U_exc": "armature command step of a PRBS edge where the test signal is enabled (else 0), V",
-    "test": "1 where the test signal may run: DC motor |w| 20..350 rad/s; throttle while a burst runs",
+    "test": "1 where the test signal is enabled (a symptom starts it there): DC motor |w| 20..350 rad/s, throttle reference 10..80 deg",
+    "burst": "1 while the throttle's KEYON or LACK test burst runs",
     "U": "armature voltage, V (steady state)",
     "M_L": "load torque, N m",
     "uac": "1 while the U_A-command channel is judged: |U| < supply - 2 V",
@@ -385,7 +386,8 @@ def main(argv=None):
         test = thr_test_enabled(a.angle)
         away = abs(a.angle - P["thr_limp_home_deg"]) >= fw("thr_limp_band_deg")
         moving = test or abs(a.speed) >= fw("thr_sign_band")
-        q.update(moving=1 if moving else 0, moving_away=1 if (moving and away) else 0,
+        q.update(test=1 if test else 0, burst=1 if test else 0,
+                 moving=1 if moving else 0, moving_away=1 if (moving and away) else 0,
                  th_sp=a.angle, stuck_err=fw("thr_sine") if test else 0.0)
         rows = load_observability()
         how = "valve moving with the test signal" if test else "no test signal at this angle"

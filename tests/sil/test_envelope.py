@@ -286,7 +286,7 @@ def test_classify_needs_the_budget():
 
 
 def _burst_times(angle_lines, dur):
-    return [t for t, q in ge.thr_series(angle_lines, dur) if q["test"]]
+    return [t for t, q in ge.thr_series(angle_lines, dur) if q["burst"]]
 
 
 def test_test_burst_model_keyon_and_lack():
