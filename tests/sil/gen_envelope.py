@@ -229,7 +229,8 @@ def thr_series(lines, dur, t_jam_starts=()):
     clamped to the controller's range plus the ECU's +-3 deg 2 Hz test
     signal while a burst runs, ThrTestBursts), the valve following it at
     most at the physical slew rate of the supply, and `stuck_err` for a
-    valve stuck at each time in t_jam_starts."""
+    valve stuck at each time in t_jam_starts (the fault starts: the motion
+    evidence restarts there too, it must postdate the fault)."""
     sp = profile(lines, "angle", dur)
     supply = param(lines, "thr_supply_V", op.P["thr_supply_V"])
     slew = math.degrees(op.thr_slew_max(supply)) * DT
@@ -282,6 +283,10 @@ def thr_series(lines, dur, t_jam_starts=()):
         if starts and t >= starts[0] - 1e-9:
             jam = th if prev is None else prev
             starts.pop(0)
+            # the evidence must postdate the fault: motion before it shows
+            # the healthy valve (the diagnosis' freshness, docs/envelope.md)
+            mv[:] = [False] * len(mv)
+            mva[:] = [False] * len(mva)
         errs.append(0.0 if jam is None else abs(math.radians(ref - jam)))
         q["stuck_err"] = max(errs[-win:])
         out.append((t, q))
