@@ -55,7 +55,8 @@ static int32_t lowpass(int32_t x, int32_t u, int32_t alpha_q16)
 /* How far the valve lags the slowest trajectory it may take to its
  * reference: the expected angle moves towards the reference by at most
  * track_slew per step; while it is on its way a valve ahead of it (faster
- * than the slowest) lags by nothing and one behind it by the distance;
+ * than the slowest) lags by nothing and takes it along (the expectation
+ * restarts where the valve got to), one behind it lags by the distance;
  * once it has arrived the lag is the distance either way. Restarted at
  * the measured angle while not judged. */
 static int32_t track_lag(canfdi_actmon_t *m, const canfdi_actmon_in_t *in)
@@ -76,6 +77,13 @@ static int32_t track_lag(canfdi_actmon_t *m, const canfdi_actmon_in_t *in)
       lag = (e < 0) ? canfdi_q31_abs(e) : 0; /* on the way down: behind if above */
     } else {
       lag = canfdi_q31_abs(e); /* arrived: the distance either way */
+    }
+    if ((lag == 0) && (rest != 0)) {
+      /* a valve ahead of the expectation: the slowest trajectory restarts
+       * where it is (up to the reference), so a reference that turns back
+       * (a blip of the pedal) is judged from where the valve got to */
+      m->track_exp_rad_q16 = (rest > 0) ? canfdi_clamp_s32(in->thr_angle_rad_q16, m->track_exp_rad_q16, in->thr_ref_rad_q16)
+                                        : canfdi_clamp_s32(in->thr_angle_rad_q16, in->thr_ref_rad_q16, m->track_exp_rad_q16);
     }
   } else if (in->thr_angle_valid) {
     m->track_exp_rad_q16 = in->thr_angle_rad_q16;

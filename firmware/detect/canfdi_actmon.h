@@ -29,7 +29,9 @@
  * 48 ms at 13.5 V, 84 ms at 9 V, docs/envelope.md) is a large reference
  * error for tens of ms that says nothing about the valve. While the
  * expected angle is on its way the lag counts only for a valve behind it
- * (a valve faster than the slowest lags by nothing); once it has arrived
+ * (a valve faster than the slowest lags by nothing, and the expected
+ * angle restarts where that valve got to, so a pedal blip that turns the
+ * reference back mid-stroke is judged from there); once it has arrived
  * (a steady or slow reference) the lag is |angle - ref|.
  * While not judged the expected angle restarts at the measured angle, so a
  * start-up with the setpoint already at wide open is the same stroke.

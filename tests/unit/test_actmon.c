@@ -163,6 +163,44 @@ START_TEST(test_tracking_strokes)
 }
 END_TEST
 
+/* A pedal blip: the reference leaves 88 deg for 2 deg for 120 ms and
+ * returns; the valve (25 rad/s) gets near 2 deg and comes back. Judged
+ * from where the valve got to, not from where the slowest trajectory
+ * would be: no symptom. The same blip with the valve stuck is one. */
+static uint32_t blip(int32_t rate_mrad)
+{
+  canfdi_actmon_in_t in = healthy();
+  canfdi_actmon_out_t out;
+  int32_t angle = CANFDI_Q16_DEG(88, 1);
+  const int32_t d = CANFDI_Q16_MILLI(rate_mrad);
+  uint32_t k;
+  uint32_t first = 0U;
+  setup();
+  for (k = 1U; (k <= 2000U) && (first == 0U); k++) {
+    const int32_t ref = ((k >= 100U) && (k < 220U)) ? CANFDI_Q16_DEG(2, 1) : CANFDI_Q16_DEG(88, 1);
+    in.thr_ref_rad_q16 = ref;
+    in.thr_angle_rad_q16 = angle;
+    (void)canfdi_actmon_step(&m, &in, &out);
+    if (out.thr_not_following) {
+      first = k;
+    }
+    if (ref > angle) {
+      angle = ((ref - angle) > d) ? (angle + d) : ref;
+    } else {
+      angle = ((angle - ref) > d) ? (angle - d) : ref;
+    }
+  }
+  return first;
+}
+
+START_TEST(test_tracking_blip)
+{
+  ck_assert_uint_eq(blip(25), 0U);
+  ck_assert_uint_eq(blip(15), 0U);
+  ck_assert_uint_gt(blip(0), 100U);
+}
+END_TEST
+
 /* Voltage applied, no current: an open motor circuit, at once; not with a
  * small command, not with an invalid current, not when de-energised. */
 START_TEST(test_no_current)
@@ -284,6 +322,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_healthy_no_symptom);
   tcase_add_test(tc, test_tracking);
   tcase_add_test(tc, test_tracking_strokes);
+  tcase_add_test(tc, test_tracking_blip);
   tcase_add_test(tc, test_no_current);
   tcase_add_test(tc, test_uac);
   suite_add_tcase(s, tc);
