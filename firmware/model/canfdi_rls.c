@@ -52,6 +52,27 @@ static inline __attribute__((always_inline)) pf_t pf_make(uint32_t m, int32_t e)
 }
 
 /*
+ * The normalised mantissa m (top bit set) with exponent e, plus one ulp
+ * when the first dropped bit rb is set (rounding half up); a carry out of
+ * 32 bits renormalises to 2^31 with e + 1.
+ */
+static inline __attribute__((always_inline)) pf_t pf_round(uint32_t m, int32_t e, uint32_t rb)
+{
+  pf_t r;
+  r.m = m;
+  r.e = e;
+  if (rb != 0U) {
+    if (m == UINT32_MAX) {
+      r.m = 0x80000000U;
+      r.e += 1;
+    } else {
+      r.m = m + 1U;
+    }
+  }
+  return r;
+}
+
+/*
  * v 2^e rounded to 32 significant bits. Scaling and overflow: exact below
  * 2^32; above, rounded half up, a carry to 2^32 renormalises.
  */
@@ -65,16 +86,7 @@ static inline __attribute__((always_inline)) pf_t pf_from_u64(uint64_t v, int32_
     const unsigned lz = canfdi_clz32(hi);
     const unsigned sh = 32U - lz; /* 1..32: bits below the top 32 */
     const uint64_t t = v >> (sh - 1U);
-    const uint32_t m = (uint32_t)(t >> 1);
-    r.e = e + (int32_t)sh;
-    if ((t & 1U) == 0U) {
-      r.m = m;
-    } else if (m == UINT32_MAX) {
-      r.m = 0x80000000U;
-      r.e += 1;
-    } else {
-      r.m = m + 1U;
-    }
+    r = pf_round((uint32_t)(t >> 1), e + (int32_t)sh, (uint32_t)(t & 1U));
   }
   return r;
 }
@@ -90,23 +102,11 @@ static inline __attribute__((always_inline)) pf_t pf_mul(pf_t a, pf_t b)
   pf_t r = PF_ZERO;
   if ((a.m != 0U) && (b.m != 0U)) {
     const uint64_t p = (uint64_t)a.m * (uint64_t)b.m;
-    uint32_t hi = (uint32_t)(p >> 32);
-    uint32_t rb;
-    r.e = a.e + b.e + 32;
+    const uint32_t hi = (uint32_t)(p >> 32);
     if ((hi & 0x80000000U) == 0U) {
-      hi = (hi << 1) | (uint32_t)((p >> 31) & 1U);
-      rb = (uint32_t)((p >> 30) & 1U);
-      r.e -= 1;
+      r = pf_round((hi << 1) | (uint32_t)((p >> 31) & 1U), a.e + b.e + 31, (uint32_t)((p >> 30) & 1U));
     } else {
-      rb = (uint32_t)((p >> 31) & 1U);
-    }
-    if (rb == 0U) {
-      r.m = hi;
-    } else if (hi == UINT32_MAX) {
-      r.m = 0x80000000U;
-      r.e += 1;
-    } else {
-      r.m = hi + 1U;
+      r = pf_round(hi, a.e + b.e + 32, (uint32_t)((p >> 31) & 1U));
     }
   }
   return r;
