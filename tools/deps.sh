@@ -21,6 +21,7 @@ APT_PACKAGES=(
   gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi qemu-system-arm
   can-utils user-mode-linux kmod iproute2
   python3 python3-venv
+  zlib1g-dev chromium-headless-shell
 )
 
 # Extra package groups a make target asks for (`tools/deps.sh GROUP...`),
