@@ -108,7 +108,7 @@ typedef struct {
   bool no_models[2];       /* [0] DC motor, [1] throttle: inputs the models cannot use */
   const char *no_models_why;
   bool progress;
-  uint8_t rx_timeout[CANFDI_RX_F_COUNT]; /* 0: calibration's */
+  uint32_t rx_rate_ms[CANFDI_RX_F_COUNT]; /* 0: the DBC's cycle time */
 } opts_t;
 
 /* ------------------------------------------------------------ events */
@@ -1621,8 +1621,10 @@ static void usage(FILE *out)
           "      --no-models WHICH    dcm, thr or dcm,thr: the models of that plant are not\n"
           "                           judged (inputs they cannot use), with --no-models-why\n"
           "      --no-models-why TEXT the reason reported\n"
-          "      --rx-timeout F=N     timeout of input frame F (DcmSensor, ThrSensor,\n"
-          "                           SetpointDcm, SetpointThr) after N missed cycles\n"
+          "      --rx-rate F=MS       input frame F (DcmSensor, ThrSensor, SetpointDcm,\n"
+          "                           SetpointThr) comes every MS ms (mapped inputs): its\n"
+          "                           timeout is the calibration's count of missed cycles\n"
+          "                           at that period (at most 255 of the DBC's cycles)\n"
           "      --progress           progress events (bytes read) every 8 MB\n"
           "      --fw-id              print the firmware id and exit\n"
           "  -h, --help               this text\n"
@@ -1732,20 +1734,21 @@ static int parse_args(int argc, char **argv, int *first_file)
       }
     } else if (strcmp(a, "--no-models-why") == 0) {
       opt.no_models_why = v;
-    } else if (strcmp(a, "--rx-timeout") == 0) {
+    } else if (strcmp(a, "--rx-rate") == 0) {
       const char *eq = strchr(v, '=');
       unsigned f;
-      long cyc = (eq != NULL) ? strtol(eq + 1, NULL, 10) : 0;
+      char *end = NULL;
+      const long ms = (eq != NULL) ? strtol(eq + 1, &end, 10) : 0;
       bool found = false;
       for (f = 0U; (eq != NULL) && (f < CANFDI_RX_F_COUNT); f++) {
         if ((strlen(rx_frame_name[f]) == (size_t)(eq - v)) && (strncmp(v, rx_frame_name[f], (size_t)(eq - v)) == 0)) {
-          found = (cyc >= 1) && (cyc <= 255);
-          opt.rx_timeout[f] = (uint8_t)cyc;
+          found = (ms >= 1) && (ms <= 60000) && (end != NULL) && (*end == '\0');
+          opt.rx_rate_ms[f] = (uint32_t)ms;
         }
       }
       if (!found) {
-        fprintf(stderr, PROG ": --rx-timeout: FRAME=CYCLES, FRAME one of DcmSensor, ThrSensor, "
-                        "SetpointDcm, SetpointThr, CYCLES 1..255\n");
+        fprintf(stderr, PROG ": --rx-rate: FRAME=MS, FRAME one of DcmSensor, ThrSensor, "
+                        "SetpointDcm, SetpointThr, MS 1..60000\n");
         return -1;
       }
     } else {
@@ -1777,8 +1780,13 @@ int main(int argc, char **argv)
   (void)setvbuf(ev, evbuf, _IOFBF, sizeof evbuf);
   canfdi_app_default_cal(&rp.cal);
   for (f = 0U; f < CANFDI_RX_F_COUNT; f++) {
-    if (opt.rx_timeout[f] != 0U) {
-      rp.cal.rx.frame[f].timeout_cycles = opt.rx_timeout[f];
+    static const uint32_t dbc_ms[CANFDI_RX_F_COUNT] = {
+        CANFDI_RP_MSG_DCM_SENSOR_CYCLE_TIME_MS, CANFDI_RP_MSG_THR_SENSOR_CYCLE_TIME_MS,
+        CANFDI_RP_MSG_SETPOINT_DCM_CYCLE_TIME_MS, CANFDI_RP_MSG_SETPOINT_THR_CYCLE_TIME_MS};
+    if (opt.rx_rate_ms[f] > dbc_ms[f]) {
+      /* the same number of missed frames at the mapped period */
+      const uint32_t c = ((uint32_t)rp.cal.rx.frame[f].timeout_cycles * opt.rx_rate_ms[f] + dbc_ms[f] - 1U) / dbc_ms[f];
+      rp.cal.rx.frame[f].timeout_cycles = (uint8_t)((c > 255U) ? 255U : c);
     }
   }
   fprintf(ev, "{\"ev\":\"hdr\",\"core\":\"" PROG "\",\"fw\":\"%s\",\"step_us\":%d,\"settle_s\":%.3f,\"gap_s\":%.3f,"
@@ -1808,7 +1816,8 @@ int main(int argc, char **argv)
       fprintf(ev, "%s", (k > 0U) ? "," : "");
       ev_q16(d->thr_par_neg_q16[k]);
     }
-    fprintf(ev, "]}}\n");
+    fprintf(ev, "]},\"rx_timeout_cycles\":[%u,%u,%u,%u]}\n", rp.cal.rx.frame[0].timeout_cycles,
+            rp.cal.rx.frame[1].timeout_cycles, rp.cal.rx.frame[2].timeout_cycles, rp.cal.rx.frame[3].timeout_cycles);
   }
   for (i = first; i < argc; i++) {
     int32_t rc;
