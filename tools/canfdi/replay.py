@@ -110,7 +110,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--settle", type=float, default=None, metavar="S",
                    help="seconds the models are not judged after a mid-drive start or a gap (default 5)")
     t.add_argument("--gap", type=float, default=0.010, metavar="S",
-                   help="no frame at all for longer than S seconds is a gap in the log (default 0.010)")
+                   help="no frame at all for longer than S seconds is a gap in the log (default 0.010; with "
+                        "--map at least three periods of the slowest mapped message)")
     t.add_argument("--clock", choices=("auto", "timestamps", "simstep"), default="auto",
                    help="time base (default auto: SimStep frames if the log has them, else time stamps)")
     o = p.add_argument_group("output")
@@ -162,10 +163,14 @@ def _feed_fifos(logs: list[LogIn], problems: list[Problems], core: subprocess.Po
         try:
             with os.fdopen(fd, "w", encoding="ascii", buffering=1 << 20) as out:
                 msgs = messages(lg.path, lg.fmt, problems[i]) if lg.fmt != "candump" else None
+                n = 0
                 if mapper is not None:
-                    mapper.write(lg.path, lg.fmt, out, problems[i])
+                    n = mapper.write(lg.path, lg.fmt, out, problems[i])
                 elif msgs is not None:
-                    write_candump(msgs, out, lg.path, problems[i])
+                    n = write_candump(msgs, out, lg.path, problems[i])
+                if n == 0 and problems[i].count == 0:
+                    problems[i].add(lg.path, -1, "no frame in it" if mapper is None else
+                                    "no frame of the map's messages in it")
         except BrokenPipeError:
             errors.append(f"{lg.path}: the replay core stopped reading")
             return
@@ -221,7 +226,8 @@ def _run_core(a: argparse.Namespace, report: Report, core_bin: Path, logs: list[
         every = max(0.01, round(total_s / 2000.0, 3))
     # a mapped bus has no ECU of this firmware whose power-up could be reproduced
     start = "mid-drive" if mapper is not None and a.start == "auto" else a.start
-    cmd = [str(core_bin), "--start", start, "--clock", a.clock, "--gap-ms", str(max(2, round(a.gap * 1000))),
+    gap_ms = max(2, round(a.gap * 1000), mapper.min_gap_ms() if mapper is not None else 0)
+    cmd = [str(core_bin), "--start", start, "--clock", a.clock, "--gap-ms", str(gap_ms),
            "--every-ms", str(round(every * 1000)), "--progress"]
     if a.settle is not None:
         cmd += ["--settle-ms", str(round(a.settle * 1000))]
@@ -394,6 +400,10 @@ def _print_quality(report: Report, i: int, bitrate: int, out: IO[str]) -> None:
                      f"{dq['gaps'][0]['to_s']:.3f} s)")
     if dq["time_stamps_back"]:
         parts.append(f"{dq['time_stamps_back']} time stamp(s) going back")
+    if dq["time_stamp_outliers"]:
+        first = dq["time_stamp_outliers_first"][0]
+        parts.append(f"{dq['time_stamp_outliers']} time stamp(s) out of sequence, taken at the current time "
+                     f"(first: line {first['line']})")
     for name, rej in dq["rejected_frames"].items():
         bad = {k: v for k, v in rej.items() if v}
         if bad:

@@ -285,6 +285,9 @@ def write_html(report: Report, doc: dict[str, Any], path: Path) -> None:
                  ["time stamps going back", f"{dq['time_stamps_back']}" + "".join(
                      f"<br>line {b['line']} by {b['by_s'] * 1e3:.3f} ms" for b in dq["time_stamps_back_first"][:5])
                   + "".join(f"<br>line {b['line']}: back {b['back_s']:.3f} s, re-based" for b in dq["rebased"])],
+                 ["time stamps out of sequence", f"{dq['time_stamp_outliers']}" + "".join(
+                     f"<br>line {o['line']}: stamped {o['stamp_s']:.6f} s, taken at {o['at_s']:.3f} s"
+                     for o in dq["time_stamp_outliers_first"][:5])],
                  ["rejected input frames", _esc("; ".join(
                      f"{n}: " + ", ".join(f"{k} {v}" for k, v in d.items() if v)
                      for n, d in dq["rejected_frames"].items() if any(d.values())) or "none")],

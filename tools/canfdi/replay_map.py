@@ -259,10 +259,12 @@ class Mapper:
         mnj = self._models_not_judged()
         if mnj:
             args += ["--no-models", ",".join(sorted(mnj)), "--no-models-why", "; ".join(mnj[k] for k in sorted(mnj))]
-        rates = [fs.rate_ms for fs in self.frames.values() if fs.rate_ms]
-        if rates:
-            args += ["--gap-ms", str(max(10, math.ceil(3 * max(rates))))]
         return args
+
+    def min_gap_ms(self) -> int:
+        """No frame for three periods of the slowest mapped message is the shortest gap."""
+        rates = [fs.rate_ms for fs in self.frames.values() if fs.rate_ms]
+        return math.ceil(3 * max(rates)) if rates else 0
 
     # ------------------------------------------------------------ conversion
     def write(self, path: Path, fmt: str, out: TextIO, problems: Problems) -> int:

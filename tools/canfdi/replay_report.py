@@ -130,6 +130,7 @@ class LogState:
     back: list[dict[str, Any]] = field(default_factory=list)
     rebase: list[dict[str, Any]] = field(default_factory=list)
     errframes: list[dict[str, Any]] = field(default_factory=list)
+    outliers: list[dict[str, Any]] = field(default_factory=list)
     fd: list[dict[str, Any]] = field(default_factory=list)
     readerr: list[dict[str, Any]] = field(default_factory=list)
     input_problems: list[tuple[str, int, str]] = field(default_factory=list)
@@ -304,6 +305,8 @@ class Report:
             lg.rebase.append(e)
         elif kind == "errframe":
             lg.errframes.append(e)
+        elif kind == "outlier":
+            lg.outliers.append(e)
         elif kind == "fd":
             lg.fd.append(e)
         elif kind == "readerr":
@@ -481,6 +484,9 @@ class Report:
                 "time_stamps_back_first": [{"line": b["line"], "at_s": b["t"], "by_s": b["back_us"] * 1e-6}
                                            for b in lg.back[:20]],
                 "rebased": [{"line": b["line"], "at_s": b["t"], "back_s": b["back_us"] * 1e-6} for b in lg.rebase],
+                "time_stamp_outliers": int(eo.get("outliers", 0)),
+                "time_stamp_outliers_first": [{"line": o["line"], "at_s": o["t"], "stamp_s": o["stamp_s"]}
+                                              for o in lg.outliers],
                 "rejected_frames": {name: {k: v for k, v in d.items() if k != "accepted"} for name, d in rx.items()},
                 "accepted_frames": {name: d.get("accepted", 0) for name, d in rx.items()},
                 "error_frames": int(eo.get("error_frames", 0)),

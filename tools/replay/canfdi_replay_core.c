@@ -83,6 +83,7 @@
 #define PU_MAX_STEPS 100U            /* ... within these steps, else mid-drive */
 #define LOOKAHEAD_FRAMES 512U        /* frames read before the clock is chosen */
 #define LOOKAHEAD_US 100000          /* ... or this much log time */
+#define JUMP_CONFIRM 8U              /* frames that confirm a jump of the time stamps */
 #define GAP_STEP_MAX_US 60000000LL   /* a longer gap is not stepped through */
 #define LINE_MAX_LEN 1024U
 #define MAX_BAD_EVENTS 100U
@@ -283,9 +284,14 @@ typedef struct {
   int64_t first_step_log_us;
   int64_t last_k;          /* simstep: last step run, -1 none */
   int64_t ecu_step_log_us; /* simstep: the step of the latest recorded actuator frame */
+  int64_t k0;              /* simstep: the first step of the log, -1 none */
   uint32_t now_us;         /* the supervisor's clock */
   uint64_t steps;
   bool batch_nonempty;
+  rp_frame_t pend[JUMP_CONFIRM];  /* timestamps: frames after a jump, not yet confirmed */
+  uint64_t pend_line[JUMP_CONFIRM];
+  unsigned n_pend;
+  uint64_t outliers;
   /* recorded commands */
   cmd_t dcm_latest, thr_latest;
   cmd_t dcm_batch0, thr_batch0;  /* at the start of this batch */
@@ -1144,17 +1150,9 @@ static void mark_gap(int64_t from_log_us, int64_t to_log_us)
 
 static int64_t shadow_next_us; /* timestamps: the supervisor's clock of the next step */
 
-static void ts_frame(rp_frame_t *f, uint64_t line)
+/* A frame at time stamp ts (shifted) on the accepted time base. */
+static void ts_accept(const rp_frame_t *f, int64_t ts, uint64_t line)
 {
-  int64_t ts = f->ts_us + rp.shift_us;
-  if (!rp.have_t0) {
-    rp.have_t0 = true;
-    rp.t0_abs_us = ts;
-    rp.origin_us = (ts < INT64_C(1000000000000)) ? 0 : ts;
-    rp.next_step_abs = ts;
-    rp.last_ts_us = ts;
-    shadow_next_us = 0;
-  }
   if (ts < rp.last_ts_us) {
     const int64_t back = rp.last_ts_us - ts;
     rp.back_n++;
@@ -1198,8 +1196,73 @@ static void ts_frame(rp_frame_t *f, uint64_t line)
   handle_frame(f, line, log_us_of_abs(ts), (uint32_t)(shadow_next_us - (rp.next_step_abs - ts)));
 }
 
+static int64_t abs64(int64_t x) { return (x < 0) ? -x : x; }
+
+/* The pending frames were outliers: each is reported and taken at the
+ * current time (its content is kept, its time stamp is not believed). */
+static void ts_flush_outliers(void)
+{
+  unsigned i;
+  for (i = 0U; i < rp.n_pend; i++) {
+    rp.outliers++;
+    if (rp.outliers <= MAX_MISC_EVENTS) {
+      fprintf(ev, "{\"ev\":\"outlier\",\"file\":%d,\"line\":%" PRIu64 ",\"t\":", rp.file_index, rp.pend_line[i]);
+      ev_time(log_us_of_abs(rp.last_ts_us));
+      fprintf(ev, ",\"stamp_s\":");
+      ev_time(rp.pend[i].ts_us);
+      fprintf(ev, "}\n");
+    }
+    ts_accept(&rp.pend[i], rp.last_ts_us, rp.pend_line[i]);
+  }
+  rp.n_pend = 0U;
+}
+
+/*
+ * A time stamp more than a gap away from the last (either way) starts a
+ * new time base only when JUMP_CONFIRM frames in a row agree with it (a
+ * pause of the logger, two logs concatenated); a frame that does not
+ * follow it back to the old time base makes the pending ones outliers.
+ */
+static void ts_frame(rp_frame_t *f, uint64_t line)
+{
+  const int64_t ts = f->ts_us + rp.shift_us;
+  if (!rp.have_t0) {
+    rp.have_t0 = true;
+    rp.t0_abs_us = ts;
+    rp.origin_us = (ts < INT64_C(1000000000000)) ? 0 : ts;
+    rp.next_step_abs = ts;
+    rp.last_ts_us = ts;
+    shadow_next_us = 0;
+  }
+  if (rp.n_pend > 0U) {
+    const int64_t base = rp.pend[rp.n_pend - 1U].ts_us + rp.shift_us;
+    if (abs64(ts - base) <= opt.gap_us) {
+      rp.pend[rp.n_pend] = *f;
+      rp.pend_line[rp.n_pend] = line;
+      rp.n_pend++;
+      if (rp.n_pend >= JUMP_CONFIRM) {
+        unsigned i;
+        for (i = 0U; i < rp.n_pend; i++) {
+          ts_accept(&rp.pend[i], rp.pend[i].ts_us + rp.shift_us, rp.pend_line[i]);
+        }
+        rp.n_pend = 0U;
+      }
+      return;
+    }
+    ts_flush_outliers();
+  }
+  if (abs64(ts - rp.last_ts_us) > opt.gap_us) {
+    rp.pend[0] = *f;
+    rp.pend_line[0] = line;
+    rp.n_pend = 1U;
+    return;
+  }
+  ts_accept(f, ts, line);
+}
+
 static void ts_end(void)
 {
+  ts_flush_outliers();
   if (rp.batch_nonempty || (rp.have_t0 && (rp.last_ts_us == rp.next_step_abs))) {
     rp.step_log_us = log_us_of_abs(rp.next_step_abs);
     run_step((uint32_t)shadow_next_us);
@@ -1230,6 +1293,11 @@ static void simstep_frame(rp_frame_t *f, uint64_t line)
       return;
     }
     k = (int64_t)m.sim_step_index;
+    if (rp.k0 < 0) {
+      /* the supervisor's clock starts with the log's first step, as it
+       * does on time stamps (from power-up: SimStep(0), the same clock) */
+      rp.k0 = k;
+    }
     if ((rp.last_k >= 0) && (k <= rp.last_k)) {
       rp.simstep_bad++;
       return;
@@ -1240,11 +1308,11 @@ static void simstep_frame(rp_frame_t *f, uint64_t line)
       mark_gap((rp.last_k + 1) * STEP_US, k * STEP_US);
       for (i = rp.last_k + 1; i < stop; i++) {
         rp.step_log_us = i * STEP_US;
-        run_step((uint32_t)(i * STEP_US));
+        run_step((uint32_t)((i - rp.k0) * STEP_US));
       }
     }
     rp.step_log_us = k * STEP_US;
-    run_step((uint32_t)(k * STEP_US));
+    run_step((uint32_t)((k - rp.k0) * STEP_US));
     rp.last_k = k;
     return;
   }
@@ -1258,7 +1326,7 @@ static void simstep_frame(rp_frame_t *f, uint64_t line)
     rp.ecu_step_log_us = rp.step_log_us;
   }
   handle_frame(f, line, (ecu_index(f->id) >= 0) ? rp.ecu_step_log_us : rp.step_log_us,
-               (uint32_t)((rp.last_k + 1) * STEP_US));
+               (uint32_t)((rp.last_k < 0) ? 0 : ((rp.last_k + 1 - rp.k0) * STEP_US)));
 }
 
 static void route(rp_frame_t *f, uint64_t line)
@@ -1365,9 +1433,12 @@ static void reset_file_state(int index, const char *name)
   rp.have_t0 = false;
   rp.shift_us = 0;
   rp.last_k = -1;
+  rp.k0 = -1;
   rp.ecu_step_log_us = 0;
   rp.steps = 0U;
   rp.batch_nonempty = false;
+  rp.n_pend = 0U;
+  rp.outliers = 0U;
   memset(&rp.dcm_latest, 0, sizeof rp.dcm_latest);
   memset(&rp.thr_latest, 0, sizeof rp.thr_latest);
   rp.dcm_batch0 = rp.dcm_latest;
@@ -1453,9 +1524,9 @@ static void end_file(void)
   fprintf(ev, ",\"gaps\":%" PRIu64 ",\"back\":%" PRIu64 ",\"error_frames\":%" PRIu64 ",\"fd_frames\":%" PRIu64
               ",\"fd_line\":%" PRIu64 ",\"remote_frames\":%" PRIu64 ",\"remote_line\":%" PRIu64
               ",\"ext_frames\":%" PRIu64 ",\"ext_line\":%" PRIu64 ",\"cmd_bad_crc\":%" PRIu64
-              ",\"simstep_bad\":%" PRIu64 ",\"channel\":",
+              ",\"simstep_bad\":%" PRIu64 ",\"outliers\":%" PRIu64 ",\"channel\":",
           rp.gaps, rp.back_n, rp.err_frames, rp.fd_frames, rp.fd_line, rp.remote_frames, rp.remote_line,
-          rp.ext_frames, rp.ext_line, rp.cmd_bad_crc, rp.simstep_bad);
+          rp.ext_frames, rp.ext_line, rp.cmd_bad_crc, rp.simstep_bad, rp.outliers);
   ev_str(rp.chan_fixed ? rp.chan : "", rp.chan_fixed ? strlen(rp.chan) : 0U);
   fprintf(ev, ",\"other_channels\":{");
   for (i = 0U; i < rp.n_other; i++) {
@@ -1574,13 +1645,17 @@ static int replay_file(const char *path)
       }
     }
   }
-  if (n < 0) {
-    int err = 0;
+  {
+    /* a read error, or (zlib: Z_BUF_ERROR) a compressed stream that ends
+     * before its end: what was read is judged, the rest is reported lost */
+    int err = Z_OK;
     const char *msg = gzerror(g, &err);
-    rp.truncated = true;
-    fprintf(ev, "{\"ev\":\"readerr\",\"file\":%d,\"line\":%" PRIu64 ",\"why\":", rp.file_index, rp.line_no);
-    ev_str(msg, strlen(msg));
-    fprintf(ev, "}\n");
+    if ((n < 0) || ((err != Z_OK) && (err != Z_STREAM_END))) {
+      rp.truncated = true;
+      fprintf(ev, "{\"ev\":\"readerr\",\"file\":%d,\"line\":%" PRIu64 ",\"why\":", rp.file_index, rp.line_no);
+      ev_str(msg, strlen(msg));
+      fprintf(ev, "}\n");
+    }
   }
   if (ncarry > 0U) {
     /* a last line without a newline: kept if it parses (a truncated one
