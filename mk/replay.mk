@@ -64,8 +64,18 @@ $(REPLAY_ASAN_BIN): $(REPLAY_HOST_OBJ) $(FW_HOST_OBJ)
 
 ALL_STEPS += $(REPLAY_BIN) $(REPLAY_ASAN_BIN)
 
+# Lockstep HIL recordings for the tests, made in one vcan sandbox
+# (tests/replay/record_hil.sh; the scenarios are HIL_SCENARIOS of
+# tests/replay/conftest.py).
+REPLAY_HIL_SCN := tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn
+REPLAY_HIL_STAMP := $(BUILD)/replay/test/hil/recorded.stamp
+$(REPLAY_HIL_STAMP): tests/replay/record_hil.sh $(REPLAY_HIL_SCN) $(BUILD)/bin/canfdi-ecu $(BUILD)/hil/canfdi-sim
+	@mkdir -p $(@D)
+	@$(VCAN_RUN) --timeout 600 tests/replay/record_hil.sh $(CURDIR)/$(@D) $(REPLAY_HIL_SCN)
+	@touch $@
+
 .PHONY: replay-test
-replay-test: $(REPLAY_BIN) $(REPLAY_ASAN_BIN) $(BUILD)/bin/canfdi-sil
+replay-test: deps $(REPLAY_BIN) $(REPLAY_ASAN_BIN) $(BUILD)/bin/canfdi-sil $(REPLAY_HIL_STAMP)
 	$(PY) -m pytest tests/replay -q
 
 TEST_STEPS += replay-test
