@@ -64,3 +64,20 @@ bench-longrun: $(BUILD)/bench/bench_longrun
 	$< -H $(MODEL_LONGRUN_H) -o $(BUILD)/bench/longrun.json
 
 BENCH_STEPS += bench-symptoms bench-longrun
+
+# ---------------------------------------------------------------------------
+# canfdi-replay's throughput (bench/bench_replay.py): on one one-hour candump
+# recording, the full diagnosis against python-can's LogReader reading it and
+# LogReader + cantools decoding it, side by side in one run, each on one
+# core. The recording (~760 MB, bench/replay_1h.scn) is written once by the
+# release SIL runner.
+REPLAY_BENCH_LOG := $(BUILD)/bench/replay-1h.log
+$(REPLAY_BENCH_LOG): bench/replay_1h.scn $(SIL_REL_BIN)
+	@mkdir -p $(@D)
+	@$(SIL_REL_BIN) -q -s $< -l $@.tmp >/dev/null && mv $@.tmp $@
+
+.PHONY: bench-replay
+bench-replay: deps $(REPLAY_BENCH_LOG) $(REPLAY_BIN)
+	@$(PY) bench/bench_replay.py --log $(REPLAY_BENCH_LOG) --out $(BUILD)/bench/replay.json
+
+BENCH_STEPS += bench-replay

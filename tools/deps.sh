@@ -136,7 +136,7 @@ fi
 SDIST_DIR=.deps/sdist
 for name in python-can cantools; do
   ver=$(sed -n "s/^$name==//p" requirements.txt)
-  if ! ls "$SDIST_DIR"/"${name//-/_}"-"$ver".tar.gz "$SDIST_DIR"/"$name"-"$ver".tar.gz >/dev/null 2>&1; then
+  if [ ! -f "$SDIST_DIR/${name//-/_}-$ver.tar.gz" ] && [ ! -f "$SDIST_DIR/$name-$ver.tar.gz" ]; then
     echo "deps: downloading the $name $ver source distribution into $SDIST_DIR (its test logs)"
     mkdir -p "$SDIST_DIR"
     SETUPTOOLS_SCM_PRETEND_VERSION="$ver" "$VENV/bin/pip" download -q --disable-pip-version-check --no-deps \
