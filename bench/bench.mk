@@ -81,3 +81,13 @@ bench-replay: deps $(REPLAY_BENCH_LOG) $(REPLAY_BIN)
 	@$(PY) bench/bench_replay.py --log $(REPLAY_BENCH_LOG) --out $(BUILD)/bench/replay.json
 
 BENCH_STEPS += bench-replay
+
+# The settling time canfdi-replay states for a log that starts mid-drive,
+# measured (bench/bench_replay_settle.py): every SIL recording cut at five
+# points, replayed with settling times of 2..6 s, the findings against the
+# recorded ECU's failing codes ($(BUILD)/bench/replay_settle.json, ~5 min).
+.PHONY: bench-replay-settle
+bench-replay-settle: deps $(SIL_REL_BIN) $(REPLAY_BIN)
+	@$(PY) bench/bench_replay_settle.py --sil $(SIL_REL_BIN) --out $(BUILD)/bench/replay_settle.json
+
+BENCH_STEPS += bench-replay-settle

@@ -46,6 +46,7 @@ Tests (`make test` runs those marked *)
   make tools-test         * pytest tests/tools: canfdi-inject, -watch, -scenario, -plot
   make vcan-test          * the vcan sandbox's self-test (tools/vcan-run)
   make hil-test           * the HIL tests inside the sandbox (tests/hil, vcan tests of tests/sim)
+  make replay-test        * canfdi-replay on SIL and HIL recordings, every log format, bad input (tests/replay)
 
 Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figure)
   make bench                all of the following except sil-pil
@@ -56,6 +57,8 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make bench-detection      detection delay, isolation, false alarms, smallest detected change
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
+  make bench-replay         canfdi-replay on a one-hour log against python-can reading/decoding it
+  make bench-replay-settle  the settling time of a mid-drive log: SIL recordings cut and replayed
   make sil-pil              instructions per step on QEMU (Cortex-M4/M0+ code), frames vs SIL
 
 Code

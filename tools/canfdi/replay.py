@@ -124,20 +124,27 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class _Progress:
-    """A tqdm bar on stderr over the bytes of the logs, off when stderr is not a terminal."""
+    """A tqdm bar on stderr, off when stderr is not a terminal: over the bytes of the logs when
+    the core reads them all itself, else over the frames converted (their total is not known)."""
 
-    def __init__(self, total: int, enabled: bool) -> None:
+    def __init__(self, total: int, enabled: bool, by_frames: bool) -> None:
         self.bar = None
-        self.base = 0
-        self.done_files: dict[int, int] = {}
+        self.by_frames = by_frames
+        self.frames: dict[int, int] = {}
         if enabled and sys.stderr.isatty():
             from tqdm import tqdm
-            self.bar = tqdm(total=total, unit="B", unit_scale=True, desc="replay", file=sys.stderr,
-                            leave=False)
+            self.bar = tqdm(total=None if by_frames else total, unit="frames" if by_frames else "B",
+                            unit_scale=True, desc="replay", file=sys.stderr, leave=False)
 
     def at(self, file_index: int, nbytes: int, sizes: list[int]) -> None:
-        if self.bar is not None:
+        if self.bar is not None and not self.by_frames:
             self.bar.n = sum(sizes[:file_index]) + nbytes
+            self.bar.refresh()
+
+    def frames_at(self, file_index: int, n: int) -> None:
+        if self.bar is not None and self.by_frames:
+            self.frames[file_index] = n
+            self.bar.n = sum(self.frames.values())
             self.bar.refresh()
 
     def close(self) -> None:
@@ -146,7 +153,7 @@ class _Progress:
 
 
 def _feed_fifos(logs: list[LogIn], problems: list[Problems], core: subprocess.Popen[bytes],
-                mapper: Any, errors: list[str]) -> None:
+                mapper: Any, errors: list[str], prog: _Progress) -> None:
     """Writes every non-direct log as candump text into its FIFO, in order."""
     for i, lg in enumerate(logs):
         if lg.direct:
@@ -167,7 +174,8 @@ def _feed_fifos(logs: list[LogIn], problems: list[Problems], core: subprocess.Po
                 if mapper is not None:
                     n = mapper.write(lg.path, lg.fmt, out, problems[i])
                 elif msgs is not None:
-                    n = write_candump(msgs, out, lg.path, problems[i])
+                    n = write_candump(msgs, out, lg.path, problems[i],
+                                      progress=lambda k, i=i: prog.frames_at(i, k))
                 if n == 0 and problems[i].count == 0:
                     problems[i].add(lg.path, -1, "no frame in it" if mapper is None else
                                     "no frame of the map's messages in it")
@@ -247,11 +255,12 @@ def _run_core(a: argparse.Namespace, report: Report, core_bin: Path, logs: list[
 
     hasher = threading.Thread(target=hash_all, daemon=True)
     hasher.start()
-    prog = _Progress(sum(sizes), not a.no_progress)
+    prog = _Progress(sum(sizes), not a.no_progress, by_frames=any(not lg.direct for lg in logs))
     core = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     feeder = None
     if any(not lg.direct for lg in logs):
-        feeder = threading.Thread(target=_feed_fifos, args=(logs, problems, core, mapper, errors), daemon=True)
+        feeder = threading.Thread(target=_feed_fifos, args=(logs, problems, core, mapper, errors, prog),
+                                  daemon=True)
         feeder.start()
     assert core.stdout is not None and core.stderr is not None
     err_chunks: list[bytes] = []
@@ -324,7 +333,7 @@ def print_timeline(report: Report, a: argparse.Namespace, out: IO[str]) -> None:
             else:
                 print("  recorded ECU: none of its frames in the log (no commands: the models that need them "
                       "are not judged)", file=out)
-            print(f"\n  {'time [s]':>10}  {'code':5}  {'status':12} {'degradation':24} {'conf':>5}  description",
+            print(f"\n  {'time [s]':>10}  {'code':5}  {'status':12} {'degradation':29} {'conf':>5}  description",
                   file=out)
         rows = []
         for f in findings:
@@ -335,7 +344,7 @@ def print_timeline(report: Report, a: argparse.Namespace, out: IO[str]) -> None:
             st = f["status_at_finding"]
             rows.append((f["first_failed_s"], f"  {_fmt_t(f['first_failed_s'])}  {f['code']:5}  "
                          f"{status_text(st) if st is not None else '':12} "
-                         f"{'dcm ' + deg.get('dcm', '?') + ', thr ' + deg.get('thr', '?'):24} {conf:>5}  "
+                         f"{'dcm ' + deg.get('dcm', '?') + ', thr ' + deg.get('thr', '?'):29} {conf:>5}  "
                          f"{f['description']}"))
         if not a.quiet:
             # later status changes of the codes found, and degradation changes
