@@ -29,7 +29,7 @@ from typing import IO, Any
 from . import DBC_PATH, REPO_ROOT
 from .catalogue import dtc_by_code
 from .replay_input import LogFormatError, Problems, log_format, messages, write_candump
-from .replay_report import MONITORS, Report, dumps, status_text
+from .replay_report import Report, dumps, status_text
 
 CORE = REPO_ROOT / "build" / "bin" / "canfdi-replay-core"
 DEFAULT_BITRATE = 1_000_000
@@ -305,7 +305,6 @@ def _fmt_t(t: float) -> str:
 def print_timeline(report: Report, a: argparse.Namespace, out: IO[str]) -> None:
     descs = dtc_by_code()
     findings = report.findings()
-    multi = len(report.logs) > 1
     for lg in report.logs:
         eo = lg.eof
         if not a.quiet:
@@ -367,7 +366,7 @@ def print_timeline(report: Report, a: argparse.Namespace, out: IO[str]) -> None:
                                  f"{', limp-home' if d['limp'] else ''}"))
                 last = key
         for _, line in sorted(rows, key=lambda r: r[0]):
-            print(line if not multi else line, file=out)
+            print(line, file=out)
         if not rows and not a.quiet:
             print("  (no trouble code)", file=out)
         if not a.quiet:

@@ -478,12 +478,10 @@ static void apply_commands(bool *dcm_known_out, bool *thr_known_out)
 {
   const cmd_t *d = rp.dcm_sample_set ? &rp.dcm_sample : &rp.dcm_batch0;
   const cmd_t *t = rp.thr_sample_set ? &rp.thr_sample : &rp.thr_batch0;
-  const bool provisional = !rp.start_decided && (opt.start == START_AUTO);
   const bool power_up = (rp.start_decided && (rp.start_mode == START_POWER_UP)) ||
                         (!rp.start_decided && (opt.start != START_MID_DRIVE));
   canfdi_app_applied_t a;
   bool call = false;
-  (void)provisional;
   a.dcm_known = true;
   a.thr_known = true;
   a.dcm = rp.app.fb.mgr.dcm;
