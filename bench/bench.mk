@@ -64,3 +64,30 @@ bench-longrun: $(BUILD)/bench/bench_longrun
 	$< -H $(MODEL_LONGRUN_H) -o $(BUILD)/bench/longrun.json
 
 BENCH_STEPS += bench-symptoms bench-longrun
+
+# ---------------------------------------------------------------------------
+# canfdi-replay's throughput (bench/bench_replay.py): on one one-hour candump
+# recording, the full diagnosis against python-can's LogReader reading it and
+# LogReader + cantools decoding it, side by side in one run, each on one
+# core. The recording (~760 MB, bench/replay_1h.scn) is written once by the
+# release SIL runner.
+REPLAY_BENCH_LOG := $(BUILD)/bench/replay-1h.log
+$(REPLAY_BENCH_LOG): bench/replay_1h.scn $(SIL_REL_BIN)
+	@mkdir -p $(@D)
+	@$(SIL_REL_BIN) -q -s $< -l $@.tmp >/dev/null && mv $@.tmp $@
+
+.PHONY: bench-replay
+bench-replay: deps $(REPLAY_BENCH_LOG) $(REPLAY_BIN)
+	@$(PY) bench/bench_replay.py --log $(REPLAY_BENCH_LOG) --out $(BUILD)/bench/replay.json
+
+BENCH_STEPS += bench-replay
+
+# The settling time canfdi-replay states for a log that starts mid-drive,
+# measured (bench/bench_replay_settle.py): every SIL recording cut at five
+# points, replayed with settling times of 2..6 s, the findings against the
+# recorded ECU's failing codes ($(BUILD)/bench/replay_settle.json, ~5 min).
+.PHONY: bench-replay-settle
+bench-replay-settle: deps $(SIL_REL_BIN) $(REPLAY_BIN)
+	@$(PY) bench/bench_replay_settle.py --sil $(SIL_REL_BIN) --out $(BUILD)/bench/replay_settle.json
+
+BENCH_STEPS += bench-replay-settle

@@ -53,6 +53,7 @@ Tests (`make test` runs those marked *)
   make tools-test         * pytest tests/tools: canfdi-inject, -watch, -scenario, -plot
   make vcan-test          * the vcan sandbox's self-test (tools/vcan-run)
   make hil-test           * the HIL tests inside the sandbox (tests/hil, vcan tests of tests/sim)
+  make replay-test        * canfdi-replay on SIL and HIL recordings, every log format, bad input (tests/replay)
 
 Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figure)
   make bench                all of the following
@@ -65,6 +66,8 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
   make bench-pil            PIL figures incl. the demo, and the RLS update vs textbook float/double/FPU
+  make bench-replay         canfdi-replay on a one-hour log against python-can reading/decoding it
+  make bench-replay-settle  the settling time of a mid-drive log: SIL recordings cut and replayed
 
 Drive profiles (docs/driving.md)
   make drive-profiles       the WLTC class 3 drive profiles, $(BUILD)/drive/*.csv (+ .json summaries)

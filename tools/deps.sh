@@ -11,6 +11,9 @@
 #      reinstalled only when requirements.txt changes; the editable tools
 #      package (console commands canfdi-*) reinstalled when requirements.txt
 #      or tools/pyproject.toml changes.
+#   4. The source distributions of python-can and cantools at the pinned
+#      versions (pip download into .deps/sdist/, once): tests/replay reads
+#      their own test logs, files no one here wrote.
 # A second run on a ready machine does no network access and takes ~1 s.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,6 +24,7 @@ APT_PACKAGES=(
   gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi qemu-system-arm
   can-utils user-mode-linux kmod iproute2
   python3 python3-venv
+  zlib1g-dev chromium-headless-shell
 )
 
 # Extra package groups a make target asks for (`tools/deps.sh GROUP...`),
@@ -125,3 +129,17 @@ if [ -f tools/pyproject.toml ]; then
     echo "$tools_want" > "$tools_stamp"
   fi
 fi
+
+# The sdists whose test data tests/replay reads (step 4 above). pip checks
+# an sdist's version by building its metadata; both take their version from
+# git (setuptools-scm), which an sdist does not have, hence the pretend.
+SDIST_DIR=.deps/sdist
+for name in python-can cantools; do
+  ver=$(sed -n "s/^$name==//p" requirements.txt)
+  if [ ! -f "$SDIST_DIR/${name//-/_}-$ver.tar.gz" ] && [ ! -f "$SDIST_DIR/$name-$ver.tar.gz" ]; then
+    echo "deps: downloading the $name $ver source distribution into $SDIST_DIR (its test logs)"
+    mkdir -p "$SDIST_DIR"
+    SETUPTOOLS_SCM_PRETEND_VERSION="$ver" "$VENV/bin/pip" download -q --disable-pip-version-check --no-deps \
+      --no-binary :all: --no-build-isolation "$name==$ver" -d "$SDIST_DIR" </dev/null
+  fi
+done

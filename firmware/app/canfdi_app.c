@@ -49,6 +49,33 @@ const canfdi_app_diag_t *canfdi_app_diag(const canfdi_app_t *app)
   return (app != NULL) ? &app->diag : NULL;
 }
 
+/* What canfdi_app_set_applied said for this step (canfdi_app.h); without
+ * a call every command is this application's own, and known. */
+static bool thr_cmd_known(const canfdi_app_t *app) { return !app->applied_set || app->applied.thr_known; }
+
+static bool thr_ref_known(const canfdi_app_t *app) { return !app->applied_set || app->applied.thr_ref_known; }
+
+int32_t canfdi_app_set_applied(canfdi_app_t *app, const canfdi_app_applied_t *applied)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if ((app != NULL) && app->initialised && (applied != NULL)) {
+    app->applied = *applied;
+    app->applied_set = true;
+    if (applied->dcm_known) {
+      app->fb.mgr.dcm = applied->dcm;
+    } else {
+      app->fb.mgr.dcm = (canfdi_actmgr_dcm_cmd_t){0}; /* not driving: nothing judged on it */
+    }
+    if (applied->thr_known) {
+      app->fb.mgr.thr = applied->thr;
+    } else {
+      app->fb.mgr.thr = (canfdi_actmgr_thr_cmd_t){0};
+    }
+    rc = canfdi_actmgr_set_applied(&app->actmgr, applied->dcm_known ? &applied->dcm : NULL);
+  }
+  return rc;
+}
+
 /* The load torque the models assume: the vehicle's feed-forward while it
  * is usable, else the calibrated nominal load (also what stage 1 offers the
  * input supervision as the stand-in of every step). */
@@ -79,7 +106,8 @@ static void stage_vote(canfdi_app_t *app)
   vin.tps1_valid = ok[0];
   vin.tps2_valid = ok[1];
   vin.model_rad_q16 = (po != NULL) ? po->theta_hat_rad_q16 : 0;
-  vin.model_valid = (po != NULL) && ((po->valid & pos_bits) != 0U) && !app->fb.thr_arm_symptom;
+  vin.model_valid = (po != NULL) && ((po->valid & pos_bits) != 0U) && !app->fb.thr_arm_symptom &&
+                    thr_cmd_known(app);
   (void)canfdi_vote_step(&app->vote, &vin, &app->vote_out);
 }
 
@@ -178,8 +206,10 @@ static void stage_gates(canfdi_app_t *app)
 {
   const bool dcm_ok = IN_VALID(app, CANFDI_RX_IN_DCM_UA) && IN_VALID(app, CANFDI_RX_IN_DCM_IA) &&
                       IN_VALID(app, CANFDI_RX_IN_DCM_OMEGA);
+  /* the throttle's models need the voltage applied (canfdi_app_set_applied) */
   const bool thr_ok = IN_VALID(app, CANFDI_RX_IN_THR_TPS1) && IN_VALID(app, CANFDI_RX_IN_THR_TPS2) &&
-                      IN_VALID(app, CANFDI_RX_IN_THR_IMOT) && IN_VALID(app, CANFDI_RX_IN_THR_USUPPLY);
+                      IN_VALID(app, CANFDI_RX_IN_THR_IMOT) && IN_VALID(app, CANFDI_RX_IN_THR_USUPPLY) &&
+                      thr_cmd_known(app);
   const bool thr_est = thr_ok && app->fb.mgr.thr.enable && app->vote_out.valid && !app->fb.thr_no_current;
   bool rp;
   bool re;
@@ -234,7 +264,7 @@ static void stage_detect(canfdi_app_t *app)
   }
   ai.thr_angle_rad_q16 = app->vote_out.angle_rad_q16;
   ai.thr_ref_rad_q16 = app->ctrl_thr.out.angle_ref_rad_q16;
-  ai.thr_angle_valid = app->vote_out.valid;
+  ai.thr_angle_valid = app->vote_out.valid && thr_ref_known(app);
   ai.thr_i_A_q16 = IN_VAL(app, CANFDI_RX_IN_THR_IMOT);
   ai.thr_i_valid = IN_VALID(app, CANFDI_RX_IN_THR_IMOT);
   ai.thr_enabled = m->thr.enable;
@@ -406,6 +436,7 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     update_feedback(app);
     rc = stage_outputs(app, out);      /* 9. */
     canfdi_count_inc(&app->diag.steps);
+    app->applied_set = false; /* set_applied acts on one step */
     app->running = true;
   }
   return rc;

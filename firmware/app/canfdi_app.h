@@ -20,6 +20,8 @@
  *                 canfdi_app_power_down() ends the operation cycle and
  *                 gives the image to store before power is cut
  *   timing        canfdi_app_deadline_miss(), canfdi_app_port_timing()
+ *   replay        canfdi_app_set_applied(): the commands another controller
+ *                 applied (a recorded vehicle), for the next step's models
  * A tester's requests act through canfdi_app_new_cycle() and
  * canfdi_app_clear_dtc(); the DTC memory is read through canfdi_app_dtc().
  *
@@ -158,6 +160,21 @@ typedef struct {
   bool est_on;    /* the estimator was fed this step */
 } canfdi_app_gate_t;
 
+/*
+ * What the actuators really got when another controller drove them
+ * (canfdi_app_set_applied: a replay of a recorded vehicle, whose ECU's
+ * actuator frames say what was applied). For one step.
+ */
+typedef struct {
+  bool dcm_known;                /* dcm is the DC-motor command applied */
+  canfdi_actmgr_dcm_cmd_t dcm;
+  bool thr_known;                /* thr is the throttle command applied */
+  canfdi_actmgr_thr_cmd_t thr;
+  bool thr_ref_known;            /* the throttle was driven to this application's
+                                  * position reference (the setpoint plus this
+                                  * application's excitation) */
+} canfdi_app_applied_t;
+
 typedef struct {
   canfdi_app_cal_t cal; /* copy; the modules point into it */
   canfdi_rx_t rx;
@@ -189,6 +206,8 @@ typedef struct {
   canfdi_app_gate_t dcm;
   canfdi_app_gate_t thr;
   canfdi_app_fb_t fb;   /* of the last step, for this one */
+  canfdi_app_applied_t applied; /* for the next step, if applied_set */
+  bool applied_set;     /* canfdi_app_set_applied was called since the last step */
   canfdi_app_diag_t diag;
   bool running;         /* a step has run since power-up */
   bool initialised;
@@ -241,6 +260,37 @@ int32_t canfdi_app_clear_dtc(canfdi_app_t *app, uint32_t group);
  * canfdi_rx_frame result. Cost: see canfdi_rx.h. */
 int32_t canfdi_app_rx_frame(canfdi_app_t *app, uint32_t id, const uint8_t *data, uint8_t dlc,
                             uint32_t now_us);
+
+/*
+ * Replay: the commands the actuators held over the interval that ends with
+ * the next step's samples, when another controller applied them (the
+ * recorded ECU's DcmActuator / ThrActuator frames), and whether the
+ * throttle was driven to this application's position reference. Call
+ * between two steps; it acts on the next step only (every later step uses
+ * this application's own commands again unless it is called again).
+ *   dcm known    the manager's record of the last step's DC-motor command
+ *                (the feedback and the bridge check's history,
+ *                canfdi_actmgr_set_applied) becomes applied->dcm;
+ *   dcm unknown  recorded as not driving: the bridge check and the U_A
+ *                command monitor (actmon UAC) are not judged;
+ *   thr known    the throttle's models and actuator monitors use
+ *                applied->thr;
+ *   thr unknown  the throttle's parity equations, its estimator and its
+ *                actuator monitors do not run, and the throttle model is
+ *                not offered to the vote (they need the voltage applied);
+ *                they restart when it is known again;
+ *   thr_ref_known false: the tracking monitor (throttle not following its
+ *                reference) is not judged: the reference the throttle was
+ *                driven to is not this application's (e.g. the recording
+ *                started after the recorded ECU's power-up, so the phase of
+ *                its excitation is unknown).
+ * The DC motor's parity equations and estimator use the measured U_A and
+ * need no command. The controllers, the manager's decisions and the frames
+ * sent stay this application's own (a controller the manager makes track
+ * tracks the command applied). Returns
+ * CANFDI_OK or -CANFDI_EINVAL (NULL argument, app not initialised). O(1).
+ */
+int32_t canfdi_app_set_applied(canfdi_app_t *app, const canfdi_app_applied_t *applied);
 
 /* One 1 ms step at now_us; writes the frames to send into out[0..n-1]
  * (out holds CANFDI_APP_MAX_TX). Returns n >= 0 or -CANFDI_EINVAL. */

@@ -64,6 +64,8 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
       app->dcm = (canfdi_app_gate_t){0};
       app->thr = (canfdi_app_gate_t){0};
       app->fb = (canfdi_app_fb_t){0};
+      app->applied = (canfdi_app_applied_t){0};
+      app->applied_set = false;
       app->diag = (canfdi_app_diag_t){0};
       app->running = false;
       app->initialised = true;

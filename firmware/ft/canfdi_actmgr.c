@@ -481,6 +481,28 @@ int32_t canfdi_actmgr_clear(canfdi_actmgr_t *m, uint32_t subsystems, uint8_t cau
   return rc;
 }
 
+int32_t canfdi_actmgr_set_applied(canfdi_actmgr_t *m, const canfdi_actmgr_dcm_cmd_t *dcm)
+{
+  int32_t rc = -CANFDI_EINVAL;
+  if ((m != NULL) && m->initialised) {
+    if (m->hist_count > 0U) {
+      canfdi_actmgr_hist_t *h =
+          &m->hist[((uint32_t)m->hist_head + CANFDI_ACTMGR_UA_HIST - 1U) % CANFDI_ACTMGR_UA_HIST];
+      if (dcm != NULL) {
+        h->u_V_q16 = dcm->u_cmd_V_q16;
+        h->bridge = dcm->bridge;
+        h->enable = dcm->enable;
+      } else {
+        h->u_V_q16 = 0;
+        h->bridge = CANFDI_ACTMGR_BRIDGE_NONE;
+        h->enable = false;
+      }
+    }
+    rc = CANFDI_OK;
+  }
+  return rc;
+}
+
 const canfdi_degrade_t *canfdi_actmgr_degrade_dcm(const canfdi_actmgr_t *m)
 {
   return (m != NULL) ? &m->dcm_deg : NULL;

@@ -349,6 +349,20 @@ int32_t canfdi_actmgr_step(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
 int32_t canfdi_actmgr_clear(canfdi_actmgr_t *m, uint32_t subsystems, uint8_t cause,
                             uint32_t faults, uint64_t now_ms);
 
+/*
+ * The DC-motor command the bridge really held over the last step, when
+ * another controller applied it (a replay of a recorded vehicle: the
+ * recorded ECU's DcmActuator frame): replaces the newest entry of the
+ * history of applied commands, so that the plausibility check of the next
+ * step judges the measured U_A against what the bridge got. dcm NULL: the
+ * command is not known; the entry is recorded as not driving, so the check
+ * is not evaluated over a window that contains it (never judged on a
+ * guess). Call between two steps; before the first step there is no entry
+ * and nothing changes. Returns CANFDI_OK or -CANFDI_EINVAL (NULL m,
+ * unusable instance). Cost: O(1).
+ */
+int32_t canfdi_actmgr_set_applied(canfdi_actmgr_t *m, const canfdi_actmgr_dcm_cmd_t *dcm);
+
 /* The degradation states, for their logs and counters (NULL for NULL). */
 const canfdi_degrade_t *canfdi_actmgr_degrade_dcm(const canfdi_actmgr_t *m);
 const canfdi_degrade_t *canfdi_actmgr_degrade_thr(const canfdi_actmgr_t *m);

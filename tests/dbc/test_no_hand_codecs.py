@@ -2,7 +2,8 @@
 dbc/canfdi.dbc, never by hand: a hand decoder does not follow a DBC change
 (a signal moved or resized decodes wrongly, silently).
 
-The product's C code (firmware/ and host_sim/, generated files excluded) is
+The product's C code (firmware/, host_sim/ and the replay core in
+tools/replay/, generated files excluded) is
 scanned for the shapes a hand codec takes: a frame byte shifted into a
 wider integer (`data[1] << 8`), bytes OR-ed together from `data[...]`, or a
 value shifted right into a frame byte (`data[2] = (uint8_t)(x >> 16)`).
@@ -14,7 +15,7 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-SCANNED = ("firmware", "host_sim")
+SCANNED = ("firmware", "host_sim", "tools/replay")
 
 # data[<index>] shifted left, or OR-ed with another data[...] byte.
 SHIFT_IN = re.compile(r"data\s*\[\s*\w+\s*\]\s*\)?\s*<<")

@@ -466,6 +466,7 @@ static void guard_ft(void)
   sink32(mout.dcm.u_cmd_V_q16 + mout.thr.u_cmd_V_q16 + (int32_t)mout.dcm.bridge +
          (int32_t)mout.dcm_ctrl_mode);
   sink32(canfdi_actmgr_clear(&mgr, in_u32, (uint8_t)in_n, in_u32, in_u32));
+  sink32(canfdi_actmgr_set_applied(&mgr, (in_n != 0U) ? &mout.dcm : NULL));
   sink32((int32_t)canfdi_degrade_state(canfdi_actmgr_degrade_dcm(&mgr)));
   sink32((int32_t)canfdi_degrade_state(canfdi_actmgr_degrade_thr(&mgr)));
   sink32((int32_t)canfdi_actmgr_diag(&mgr).steps);
@@ -786,6 +787,13 @@ static void guard_app(void)
   sink32(canfdi_app_init(&app, &cal, in_u32));
   sink32(canfdi_app_rx_frame(&app, in_u32, frame, (uint8_t)in_n, in_u32));
   sink32(canfdi_app_step(&app, in_u32, out));
+  {
+    canfdi_app_applied_t ap = {0};
+    ap.dcm_known = (in_n & 1U) != 0U;
+    ap.thr_known = (in_n & 2U) != 0U;
+    ap.thr_ref_known = (in_n & 4U) != 0U;
+    sink32(canfdi_app_set_applied(&app, &ap));
+  }
   canfdi_app_deadline_miss(&app);
   canfdi_app_port_timing(&app, in_u32, in_u32 + 1U);
   sinku64((uint64_t)canfdi_app_dtc(&app)->changes);

@@ -465,6 +465,47 @@ END_TEST
 
 static const double weak_fraction[] = {0.0, 0.3, 0.49, 0.51, 0.8, 1.0, -0.5};
 
+/* canfdi_actmgr_set_applied: the newest history entry becomes what the
+ * bridge got; the check of the next step judges it (an applied -30 V that
+ * the measured +20 V does not show is implausible), and an unknown command
+ * (NULL) is never judged. Before the first step there is nothing to
+ * replace. */
+START_TEST(test_set_applied_history)
+{
+  canfdi_actmgr_t m;
+  canfdi_actmgr_cfg_t c = cfg_with(3U, 1U, 1U);
+  canfdi_actmgr_in_t in = in_nominal();
+  canfdi_actmgr_out_t out;
+  const canfdi_vote_out_t v = vote_ok();
+  canfdi_actmgr_dcm_cmd_t cmd = {true, (uint8_t)CANFDI_ACTMGR_BRIDGE_A, Q16(-30.0)};
+  uint32_t k;
+  ck_assert_int_eq(canfdi_actmgr_set_applied(NULL, &cmd), -CANFDI_EINVAL);
+  ck_assert_int_eq(canfdi_actmgr_init(&m, &c), CANFDI_OK);
+  ck_assert_int_eq(canfdi_actmgr_set_applied(&m, &cmd), CANFDI_OK);
+  ck_assert_uint_eq(m.hist_count, 0U);
+  /* healthy: +20 V commanded and measured */
+  for (k = 0U; k < 10U; k++) {
+    ck_assert_int_eq(canfdi_actmgr_step(&m, &in, &v, &out), CANFDI_OK);
+  }
+  ck_assert_uint_eq(canfdi_actmgr_diag(&m).ua_implausible, 0U);
+  /* unknown: not judged, however long */
+  for (k = 0U; k < 10U; k++) {
+    ck_assert_int_eq(canfdi_actmgr_set_applied(&m, NULL), CANFDI_OK);
+    ck_assert_int_eq(canfdi_actmgr_step(&m, &in, &v, &out), CANFDI_OK);
+  }
+  ck_assert_uint_eq(canfdi_actmgr_diag(&m).ua_implausible, 0U);
+  /* applied -30 V, measured +20 V: bridge A failed after 3 samples */
+  for (k = 0U; k < 3U; k++) {
+    ck_assert(!m.bridge_failed[0]);
+    ck_assert_int_eq(canfdi_actmgr_set_applied(&m, &cmd), CANFDI_OK);
+    ck_assert_int_eq(canfdi_actmgr_step(&m, &in, &v, &out), CANFDI_OK);
+  }
+  ck_assert(m.bridge_failed[0]);
+  ck_assert_uint_eq(canfdi_actmgr_diag(&m).ua_implausible, 3U);
+  ck_assert_uint_eq(out.dcm.bridge, CANFDI_ACTMGR_BRIDGE_B);
+}
+END_TEST
+
 START_TEST(test_weak_bridge_threshold)
 {
   /* _i: delivered fraction (7) x sign (2). A bridge that delivers less
@@ -1136,6 +1177,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_weak_bridge_threshold, 0,
                       (int)(2U * sizeof weak_fraction / sizeof weak_fraction[0]));
   tcase_add_test(tc, test_supply_clamp_expected);
+  tcase_add_test(tc, test_set_applied_history);
   tcase_add_loop_test(tc, test_dcm_catalogue, 0,
                       (int)(sizeof dcm_cat_cases / sizeof dcm_cat_cases[0]));
   tcase_add_test(tc, test_dcm_clear_restores_bridge_a);

@@ -11,7 +11,14 @@
  *     the actuator manager itself, so the manager's plausibility check
  *     compares the measured armature voltage with what was applied (no
  *     false dead-bridge code when the sensor node starts with a bad
- *     current signal).
+ *     current signal);
+ *   - the commands another controller applied (canfdi_app_set_applied, a
+ *     replay of a recording): the application's own commands given back
+ *     change no frame; an unknown throttle command stops the throttle's
+ *     models until it is known again; an applied DC-motor command the
+ *     measured U_A does not show is judged by the bridge check, an unknown
+ *     one is not judged; an unknown position reference keeps the tracking
+ *     monitor silent.
  * Counters near their wrap are set directly in the application's state
  * (the fields are public for reading; tests write them to fast-forward
  * time). The time stamps past 71.6 minutes are tested by the SIL scenario
@@ -34,6 +41,8 @@ static canfdi_app_cal_t cal;
 static canfdi_sim_scn_t scn;
 static canfdi_sim_t sim;
 static canfdi_sim_rig_t rig;
+/* Called before every ECU step of loop_step when set (the replay's hook). */
+static void (*before_step)(void);
 
 static void loop_start(const char *text)
 {
@@ -44,6 +53,7 @@ static void loop_start(const char *text)
                    CANFDI_OK);
   canfdi_app_default_cal(&cal);
   ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+  before_step = NULL;
 }
 
 /* One lockstep step as the SIL rig runs it: the plant's and the vehicle's
@@ -62,6 +72,9 @@ static int32_t loop_step(canfdi_tx_frame_t *out)
         (id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) || (id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID)) {
       (void)canfdi_app_rx_frame(&app, id, pf[j].data, pf[j].dlc, now_us);
     }
+  }
+  if (before_step != NULL) {
+    before_step();
   }
   n = canfdi_app_step(&app, now_us, out);
   ck_assert_int_ge(n, 2);
@@ -256,6 +269,162 @@ START_TEST(test_startup_hold_off_is_what_the_manager_applied)
 }
 END_TEST
 
+
+/* ------------------------------------------------ canfdi_app_set_applied */
+
+static canfdi_app_applied_t applied;
+
+static void give_own_commands(void)
+{
+  applied.dcm_known = true;
+  applied.dcm = app.fb.mgr.dcm;
+  applied.thr_known = true;
+  applied.thr = app.fb.mgr.thr;
+  applied.thr_ref_known = true;
+  ck_assert_int_eq(canfdi_app_set_applied(&app, &applied), CANFDI_OK);
+}
+
+static void give_applied(void) { ck_assert_int_eq(canfdi_app_set_applied(&app, &applied), CANFDI_OK); }
+
+/* FNV-1a over every frame the ECU sends in `steps` steps. */
+static uint64_t frames_hash(uint32_t steps)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint64_t h = 1469598103934665603ULL;
+  uint32_t k;
+  for (k = 0U; k < steps; k++) {
+    const int32_t n = loop_step(out);
+    int32_t i;
+    for (i = 0; i < n; i++) {
+      unsigned b;
+      h = (h ^ out[i].id) * 1099511628211ULL;
+      for (b = 0U; b < out[i].dlc; b++) {
+        h = (h ^ out[i].data[b]) * 1099511628211ULL;
+      }
+    }
+  }
+  return h;
+}
+
+/* A replay of a run from power-up gives the application its own commands
+ * back: nothing may change, frame for frame, faults and all. */
+START_TEST(test_set_applied_own_commands_change_nothing)
+{
+  uint64_t plain;
+  uint64_t replayed;
+  ck_assert_int_eq(canfdi_app_set_applied(NULL, &applied), -CANFDI_EINVAL);
+  loop_start(two_faults_scn);
+  ck_assert_int_eq(canfdi_app_set_applied(&app, NULL), -CANFDI_EINVAL);
+  plain = frames_hash(2500U);
+  loop_start(two_faults_scn);
+  before_step = give_own_commands;
+  replayed = frames_hash(2500U);
+  ck_assert_uint_eq(replayed, plain);
+  ck_assert_uint_ge(canfdi_dtc_count_by_mask(canfdi_app_dtc(&app), (uint8_t)CANFDI_DTC_ST_TF), 2U);
+}
+END_TEST
+
+/* Without the throttle's command its models cannot run: no residual, no
+ * estimate fed, the model not offered to the vote; when the command is
+ * known again the parity equations restart. */
+START_TEST(test_set_applied_thr_unknown_stops_throttle_models)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t resets;
+  uint32_t k;
+  loop_start(fault_free_scn);
+  loop_run(1500U);
+  ck_assert(app.thr.in_ok);
+  ck_assert_uint_ne(app.sym.thr_rn_valid, 0U);
+  resets = canfdi_parity_thr_diag(&app.parity_thr)->resets;
+  before_step = give_applied;
+  applied = (canfdi_app_applied_t){0};
+  applied.dcm_known = true;
+  applied.thr_ref_known = true;
+  for (k = 0U; k < 50U; k++) {
+    applied.dcm = app.fb.mgr.dcm;
+    (void)loop_step(out);
+    ck_assert(!app.thr.in_ok);
+    ck_assert(!app.thr.est_on);
+    ck_assert_uint_eq(app.sym.thr_rn_valid, 0U);
+    ck_assert_uint_eq(app.vote_out.used_mask & CANFDI_VOTE_BIT_MODEL, 0U);
+    ck_assert(!app.actmon_out.thr_no_current);
+  }
+  before_step = NULL;
+  (void)loop_step(out);
+  ck_assert(app.thr.in_ok);
+  ck_assert_uint_eq(canfdi_parity_thr_diag(&app.parity_thr)->resets, resets + 1U);
+}
+END_TEST
+
+/* The bridge check judges the command the bridge got: an applied -40 V
+ * that the measured U_A (about +38 V at 100 rad/s) does not show fails
+ * bridge A after
+ * bridge_fail_steps samples; an unknown command is never judged. */
+START_TEST(test_set_applied_dcm_command_judged_or_not)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t k;
+  loop_start(fault_free_scn);
+  loop_run(1500U);
+  ck_assert(app.fb.mgr.dcm.enable);
+  before_step = give_applied;
+  applied = (canfdi_app_applied_t){0};
+  applied.dcm_known = false;
+  applied.thr_known = true;
+  applied.thr_ref_known = true;
+  for (k = 0U; k < 100U; k++) {
+    applied.thr = app.fb.mgr.thr;
+    (void)loop_step(out);
+    ck_assert(!app.actmon_out.dcm_uac_valid);
+  }
+  ck_assert(!app.actmgr.bridge_failed[0]);
+  applied.dcm_known = true;
+  applied.dcm.enable = true;
+  applied.dcm.bridge = CANFDI_ACTMGR_BRIDGE_A;
+  applied.dcm.u_cmd_V_q16 = -40 * 65536;
+  for (k = 0U; (k < 10U) && !app.actmgr.bridge_failed[0]; k++) {
+    applied.thr = app.fb.mgr.thr;
+    (void)loop_step(out);
+  }
+  ck_assert(app.actmgr.bridge_failed[0]);
+  ck_assert_uint_eq(k, cal.actmgr.dcm_bridge_fail_steps);
+}
+END_TEST
+
+/* A jammed valve (tests/sil/scenarios/thr_jammed.scn): with the reference
+ * known the tracking monitor fires; with it unknown the monitor stays
+ * silent (the model rule may still name the jam). */
+START_TEST(test_set_applied_ref_unknown_silences_tracking)
+{
+  static const char *const jam_scn =
+      "duration 5\nseed 113\nnoise dcm_ua 0.05\nnoise dcm_ia 0.02\nnoise dcm_speed 0.2\n"
+      "noise thr_tps1 0.003\nnoise thr_tps2 0.003\nnoise thr_i 0.01\ninit dcm_winding 52.3\n"
+      "speed const 100\nload const 1.2\nangle const 25\nangle sine 1 5 8 0.5\n"
+      "fault 3 thr_jammed abrupt 1\n";
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t k;
+  bool fired = false;
+  loop_start(jam_scn);
+  for (k = 0U; k < 3600U; k++) {
+    (void)loop_step(out);
+    fired = fired || ((app.sym.flags & CANFDI_SYM_F_THR_NOT_FOLLOWING) != 0U);
+  }
+  ck_assert(fired);
+  loop_start(jam_scn);
+  before_step = give_applied;
+  for (k = 0U; k < 3600U; k++) {
+    applied.dcm_known = true;
+    applied.dcm = app.fb.mgr.dcm;
+    applied.thr_known = true;
+    applied.thr = app.fb.mgr.thr;
+    applied.thr_ref_known = false;
+    (void)loop_step(out);
+    ck_assert_uint_eq(app.sym.flags & CANFDI_SYM_F_THR_NOT_FOLLOWING, 0U);
+  }
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("app_regress");
@@ -266,6 +435,13 @@ static Suite *make_suite(void)
   suite_add_tcase(s, tc);
   tc = tcase_create("startup");
   tcase_add_test(tc, test_startup_hold_off_is_what_the_manager_applied);
+  suite_add_tcase(s, tc);
+  tc = tcase_create("replay");
+  tcase_set_timeout(tc, 120);
+  tcase_add_test(tc, test_set_applied_own_commands_change_nothing);
+  tcase_add_test(tc, test_set_applied_thr_unknown_stops_throttle_models);
+  tcase_add_test(tc, test_set_applied_dcm_command_judged_or_not);
+  tcase_add_test(tc, test_set_applied_ref_unknown_silences_tracking);
   suite_add_tcase(s, tc);
   return s;
 }

@@ -13,9 +13,14 @@ Modules:
   profile_plot   PNG of a profile file
   expect         canfdi-sil's judgement of expect lines, on a timeline
   hil            ECU/sim processes and the bus recorder of a HIL run
+  replay         canfdi-replay: the supervisor over recorded logs (C core tools/replay)
+  replay_input   every python-can format as candump text, bad lines reported
+  replay_report  the replay's events folded into findings, not judged, data quality, JSON
+  replay_html    the self-contained HTML report
+  replay_map     --map: another DBC's signals onto the supervisor's inputs
 Console commands: canfdi-inject (inject), canfdi-watch (watch),
 canfdi-scenario (scenario_run), canfdi-plot (logplot), canfdi-profile-plot
-(profile_plot).
+(profile_plot), canfdi-replay (replay).
 """
 from pathlib import Path
 

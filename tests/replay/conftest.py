@@ -1,0 +1,136 @@
+"""Shared helpers of the canfdi-replay tests (tests/replay, `make replay-test`).
+
+Recordings: every SIL scenario's bus log, written by canfdi-sil -l here
+(build/replay/test/sil/), and the lockstep HIL recordings `make
+replay-test` makes in the vcan sandbox with canfdi-scenario
+(build/replay/test/hil/, tests/replay/record_hil.sh). What the recorded
+ECU reported is read from the recordings with canfdi.timeline (the
+tester's decoding with cantools), independently of the replay.
+"""
+from __future__ import annotations
+
+import contextlib
+import functools
+import io
+import json
+import os
+import re
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tools"))
+
+from canfdi import replay  # noqa: E402
+from canfdi.logio import read_log  # noqa: E402
+from canfdi.timeline import Timeline  # noqa: E402
+
+CORE = ROOT / "build" / "bin" / "canfdi-replay-core"
+CORE_ASAN = ROOT / "build" / "bin" / "canfdi-replay-core-asan"
+SIL = ROOT / "build" / "bin" / "canfdi-sil"
+OUT = ROOT / "build" / "replay" / "test"
+HIL_OUT = OUT / "hil"
+SCENARIOS = sorted(p for p in (ROOT / "tests" / "sil" / "scenarios").glob("*.scn") if p.name != "demo.scn")
+MATRIX = sorted((ROOT / "tests" / "sil" / "matrix").glob("*.scn"))
+#: ECU-side lines of the SIL rig that never reach the bus (host_sim/SCENARIO.md)
+ECU_ACTIONS = re.compile(r"^\s*(cycle|clear|power_cycle)\b", re.M)
+#: Longer than this (simulated seconds) is left to `make sil-test` alone.
+MAX_DURATION_S = 60.0
+#: The HIL recordings tests/replay/record_hil.sh makes (scenario paths).
+HIL_SCENARIOS = ("tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn",)
+
+
+def duration_s(scn: Path) -> float:
+    m = re.search(r"^\s*duration\s+(\S+)", scn.read_text(), re.M)
+    return float(m.group(1)) if m else 0.0
+
+
+def has_ecu_actions(scn: Path) -> bool:
+    return bool(ECU_ACTIONS.search(scn.read_text()))
+
+
+def replayable(scn: Path) -> bool:
+    """Everything of the run is on the bus, and it is short enough for make test."""
+    return not has_ecu_actions(scn) and duration_s(scn) <= MAX_DURATION_S
+
+
+def sil_log_path(scn: Path) -> Path:
+    return OUT / "sil" / f"{scn.parent.name}_{scn.stem}.log"
+
+
+def make_sil_log(scn: Path) -> Path:
+    log = sil_log_path(scn)
+    if not log.exists() or log.stat().st_mtime < max(scn.stat().st_mtime, SIL.stat().st_mtime):
+        log.parent.mkdir(parents=True, exist_ok=True)
+        tmp = log.with_suffix(".tmp")
+        subprocess.run([str(SIL), "-q", "-s", str(scn), "-l", str(tmp)], stdout=subprocess.DEVNULL,
+                       stderr=subprocess.PIPE, check=False, cwd=ROOT)
+        tmp.replace(log)
+    return log
+
+
+@pytest.fixture(scope="session")
+def sil_logs() -> dict[Path, Path]:
+    """Every replayable SIL scenario's bus log (scenarios and matrix)."""
+    scns = [s for s in SCENARIOS + MATRIX if replayable(s)]
+    with ThreadPoolExecutor(max_workers=2) as ex:
+        logs = list(ex.map(make_sil_log, scns))
+    return dict(zip(scns, logs))
+
+
+@contextlib.contextmanager
+def core_env(core: Path):
+    old = os.environ.get("CANFDI_REPLAY_CORE")
+    os.environ["CANFDI_REPLAY_CORE"] = str(core)
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("CANFDI_REPLAY_CORE", None)
+        else:
+            os.environ["CANFDI_REPLAY_CORE"] = old
+
+
+def run_replay(args: list[str], tmp: Path, core: Path = CORE) -> tuple[int, dict[str, Any] | None, str, str]:
+    """canfdi-replay in this process: (exit status, JSON report or None, stdout, stderr)."""
+    js = tmp / f"report{len(list(tmp.glob('report*.json')))}.json"
+    out, err = io.StringIO(), io.StringIO()
+    with core_env(core), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = replay.main([*args, "--json", str(js), "--no-progress"])
+    doc = json.loads(js.read_text()) if js.exists() else None
+    return rc, doc, out.getvalue(), err.getvalue()
+
+
+@functools.lru_cache(maxsize=None)
+def recorded_ecu(log: Path) -> Timeline:
+    """The recorded ECU's trouble codes, decoded by canfdi.timeline from the log itself."""
+    return Timeline().feed_all(read_log(log))
+
+
+def recorded_first_failed(log: Path) -> dict[str, float]:
+    tl = recorded_ecu(log)
+    return {c: r.first_failed_us * 1e-6 for c, r in tl.dtcs.items() if r.first_failed_us >= 0}
+
+
+def recorded_active_after(log: Path, t_s: float, code: str) -> bool:
+    """The code's testFailed bit is set in the recorded ECU's frames at some time >= t_s."""
+    rec = recorded_ecu(log).dtcs.get(code)
+    if rec is None:
+        return False
+    t_us = round(t_s * 1e6)
+    at = rec.state_at(t_us)
+    return bool((at is not None and at[1] & 1) or any(h[0] >= t_us and h[1] & 1 for h in rec.history))
+
+
+def cut_log(src: Path, dst: Path, t_from: float) -> Path:
+    """The lines of a candump log from time stamp t_from on (a recording started mid-run)."""
+    with src.open() as f, dst.open("w") as g:
+        for line in f:
+            if float(line[1:line.index(")")]) >= t_from - 1e-9:
+                g.write(line)
+    return dst

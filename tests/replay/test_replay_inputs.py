@@ -1,0 +1,296 @@
+"""What canfdi-replay reads: every python-can format gives the candump log's
+diagnosis; bad input (garbage and truncated lines, time stamps going back,
+gaps, CAN FD, error and remote frames, unknown ids, several channels,
+damaged or foreign files, the test logs of python-can and cantools) gets a
+message with the file and line and the rest of the log is still judged,
+never a crash or a hang. The damaged inputs also run through the ASan/UBSan
+build of the core."""
+from __future__ import annotations
+
+import ast
+import gzip
+import itertools
+import tarfile
+import time
+from pathlib import Path
+
+import can
+import pytest
+
+from conftest import CORE, CORE_ASAN, ROOT, SCENARIOS, make_sil_log, run_replay
+
+SDIST = ROOT / ".deps" / "sdist"
+LOG_SUFFIXES = (".asc", ".blf", ".trc", ".csv", ".log", ".mf4", ".gz")
+
+
+@pytest.fixture(scope="module")
+def ia_log() -> Path:
+    """dcm_ia_offset: P1A20 at 3.051 s from power-up."""
+    return make_sil_log(next(s for s in SCENARIOS if s.stem == "dcm_ia_offset"))
+
+
+@pytest.fixture(scope="module")
+def nominal_log() -> Path:
+    return make_sil_log(next(s for s in SCENARIOS if s.stem == "nominal_setpoints"))
+
+
+@pytest.fixture(scope="module")
+def reference(ia_log: Path, tmp_path_factory: pytest.TempPathFactory) -> dict:
+    rc, doc, _, _ = run_replay([str(ia_log)], tmp_path_factory.mktemp("ref"))
+    assert rc == 1 and doc is not None
+    assert [(f["code"], f["first_failed_s"]) for f in doc["dtcs"]] == [("P1A20", pytest.approx(3.051))]
+    return doc
+
+
+def _findings(doc: dict) -> list[tuple[str, float]]:
+    return [(f["code"], round(f["first_failed_s"], 6)) for f in doc["dtcs"]]
+
+
+def _line_no(lines: list[str], text: str) -> int:
+    return next(n for n, line in enumerate(lines, 1) if line == text)
+
+
+# ------------------------------------------------------------ formats
+
+@pytest.mark.parametrize("suffix", [".asc", ".blf", ".trc", ".csv", ".mf4", ".log.gz", ".asc.gz"])
+def test_every_format_gives_the_same_diagnosis(suffix: str, ia_log: Path, reference: dict, tmp_path: Path) -> None:
+    """The candump recording written by python-can's own writers in another format."""
+    out = tmp_path / f"run{suffix}"
+    if suffix == ".log.gz":
+        out.write_bytes(gzip.compress(ia_log.read_bytes()))
+    else:
+        with can.Logger(str(out)) as w:
+            for msg in can.LogReader(str(ia_log)):
+                w.on_message_received(msg)
+    rc, doc, text, err = run_replay([str(out)], tmp_path)
+    assert doc is not None, err
+    assert rc == 1
+    assert _findings(doc) == _findings(reference)
+    lg = doc["logs"][0]
+    assert lg["start"] == "power-up"
+    assert lg["recorded_ecu"]["identical"] == lg["recorded_ecu"]["frames"] > 0
+    assert len(lg["sha256"]) == 64
+    assert lg["format"] == ("candump" if suffix == ".log.gz" else suffix.split(".")[1])
+
+
+# ------------------------------------------------------------ damaged candump text
+
+def test_bad_lines_are_reported_and_the_rest_judged(ia_log: Path, reference: dict, tmp_path: Path) -> None:
+    lines = ia_log.read_text().splitlines(keepends=True)
+
+    def at(i: int) -> str:
+        """The time stamp of the line the new one goes before."""
+        return lines[i][:19]
+
+    # (index to insert before, text, what the report must say)
+    bad = [(5, "garbage that is no frame\n", "no '(timestamp)'"),
+           (100, f"{at(100)} vcan0 01G#00\n", "identifier"),
+           (200, f"{at(200)} vcan0 010#0011223\n", "odd number of data digits"),
+           (300, f"{at(300)} vcan0 010#001122334455667788\n", "more than 8 data bytes"),
+           (400, f"{at(400)} vcan0 900#00\n", "above 0x7FF"),
+           (500, f"{at(500)[:-1]} vcan0 010#00\n", "not closed"),
+           (600, f"{at(600)} vcan0 010#00 trailing words\n", "unexpected text"),
+           (700, "x" * 3000 + "\n", "longer than 1024"),
+           (800, f"{at(800)} vcan0 0\x0010#00\n", "NUL byte")]
+    noise = [(900, f"{at(900)} vcan0 010##1" + "00" * 12 + "\n"),      # CAN FD, our id
+             (950, f"{at(950)} vcan0 20000080#0000000000000000\n"),     # error frame
+             (1000, f"{at(1000)} vcan0 010#R8\n"),                      # remote frame
+             (1050, f"{at(1050)} vcan0 00000010#0000000000000000\n"),   # 29-bit id 0x10
+             (1100, f"{at(1100)} vcan0 555#00\n"),                      # not in the DBC
+             (1150, f"{at(1150)} can1 010#0000000000000000\n"),         # another channel
+             (1151, f"{at(1150)} can1 011#0000000000000000 R\n"),
+             (1200, "(0000000001.500000) vcan0 555#01\n")]               # stamped 1.2 s ahead
+    for i, t in sorted([(i, t) for i, t, _ in bad] + noise, key=lambda x: x[0], reverse=True):
+        lines.insert(i, t)
+    lines.append("(0000000005.000000) vcan0 010#00112")  # truncated last line, no newline
+    log = tmp_path / "damaged.log"
+    log.write_text("".join(lines))
+    all_lines = log.read_text().split("\n")
+    rc, doc, out, err = run_replay([str(log)], tmp_path)
+    assert doc is not None and rc == 1, err
+    # the diagnosis is untouched: none of the noise reached the supervisor as a frame of its own
+    assert _findings(doc) == _findings(reference)
+    assert doc["logs"][0]["recorded_ecu"]["differing"] == 0
+    dq = doc["data_quality"][0]
+    assert dq["bad_line_count"] == len(bad) + 1
+    reported = {b["line"]: b["why"] for b in dq["bad_lines"]}
+    for _, t, why in bad:
+        no = _line_no(all_lines, t.rstrip("\n"))
+        assert no in reported and why in reported[no], (no, reported.get(no), why)
+    assert len(all_lines) in reported  # the truncated last line
+    assert dq["fd_frames"] == 1 and dq["error_frames"] == 1 and dq["remote_frames"] == 1
+    assert dq["extended_frames"] == 1 and dq["unknown_ids"] == {"555": 2, "x10": 1}
+    assert dq["other_channels"] == {"can1": {"frames": 2, "first_line": _line_no(all_lines, noise[5][1].rstrip("\n"))}}
+    assert dq["gap_count"] == 0 and dq["time_stamp_outliers"] == 1
+    assert dq["time_stamp_outliers_first"][0]["line"] == _line_no(all_lines, noise[7][1].rstrip("\n"))
+    assert "bad line(s) (first: line 6:" in out
+
+
+def test_channel_option_and_auto_choice(ia_log: Path, tmp_path: Path) -> None:
+    """Two channels: the first carrying a DBC frame is judged unless -c names another."""
+    log = tmp_path / "two.log"
+    with log.open("w") as f:
+        f.write("(0000000000.000000) can7 123#00\n")  # not in the DBC: does not choose
+        for line in ia_log.read_text().splitlines():
+            f.write(line + "\n")
+            f.write(line.replace(" vcan0 ", " can9 ")[:-2] + "00\n")  # a damaged copy
+    rc, doc, _, _ = run_replay([str(log)], tmp_path)
+    assert doc is not None and doc["logs"][0]["channel"] == "vcan0" and rc == 1
+    assert doc["data_quality"][0]["other_channels"]["can9"]["frames"] > 20000
+    rc2, doc2, _, _ = run_replay(["-c", "can9", str(log)], tmp_path)
+    assert doc2 is not None and doc2["logs"][0]["channel"] == "can9"
+    assert doc2["logs"][0]["start"] == "mid-drive"  # its ECU frames are not the replay's
+
+
+def test_time_stamps_going_back(nominal_log: Path, tmp_path: Path) -> None:
+    """Small steps back (merged loggers) are counted; a jump back (two logs concatenated)
+    re-bases the rest, which is still judged."""
+    lines = nominal_log.read_text().splitlines(keepends=True)
+    i = next(k for k in range(1000, 2000) if lines[k][:19] != lines[k + 1][:19])
+    lines[i], lines[i + 1] = lines[i + 1], lines[i]
+    log = tmp_path / "back.log"
+    log.write_text("".join(lines[:40000] + lines[:20000]))
+    rc, doc, out, _ = run_replay([str(log)], tmp_path)
+    assert doc is not None
+    dq = doc["data_quality"][0]
+    assert dq["time_stamps_back"] >= 2
+    assert [r["line"] for r in dq["rebased"]] == [40001]
+    first_part = float(lines[39999][1:lines[39999].index(")")])
+    assert doc["logs"][0]["last_s"] > first_part + 3.0  # the second part went on after the first
+
+
+def test_gap_in_the_log_is_not_judged(nominal_log: Path, tmp_path: Path) -> None:
+    """No frame at all for 100 ms: the supervisor's timeouts in the gap are not findings;
+    the gap and what could not be judged are reported."""
+    log = tmp_path / "gap.log"
+    with nominal_log.open() as f, log.open("w") as g:
+        for line in f:
+            if not 6.0 <= float(line[1:line.index(")")]) < 6.1:
+                g.write(line)
+    rc, doc, out, _ = run_replay([str(log)], tmp_path)
+    assert doc is not None
+    assert rc == 0 and doc["dtcs"] == [], out
+    dq = doc["data_quality"][0]
+    assert dq["gap_count"] == 1
+    assert dq["gaps"][0]["from_s"] == pytest.approx(5.999) and dq["gaps"][0]["to_s"] == pytest.approx(6.1)
+    spans = {n["monitor"]: n["spans"] for n in doc["not_judged"]}
+    assert any(s["from_s"] <= 6.0 and s["to_s"] >= 6.1 for s in spans["com_dcm"])
+    assert any(s["to_s"] >= 11.0 and "gap" in s["why"] for s in spans["dcm_models"])
+
+
+def test_frame_missing_on_the_bus(nominal_log: Path, tmp_path: Path) -> None:
+    """ThrSensor stops for 200 ms while everything else goes on: the timeout is judged and
+    found, the throttle models are not judged while the frame is missing."""
+    log = tmp_path / "thr_lost.log"
+    with nominal_log.open() as f, log.open("w") as g:
+        for line in f:
+            if not (" 011#" in line and 8.0 <= float(line[1:line.index(")")]) < 8.2):
+                g.write(line)
+    rc, doc, _, _ = run_replay([str(log)], tmp_path)
+    assert doc is not None and rc == 1
+    assert [f["code"] for f in doc["dtcs"]] == ["U1A01"]
+    assert 8.0 < doc["dtcs"][0]["first_failed_s"] < 8.02
+    spans = {n["monitor"]: n["spans"] for n in doc["not_judged"]}
+    assert any(s["from_s"] <= 8.01 and s["to_s"] >= 8.19 and "ThrSensor" in s["why"] for s in spans["thr_models"])
+    missing = doc["data_quality"][0]["missing_frames"]
+    assert any(m["frame"] == "ThrSensor" and not m["never_received"] for m in missing)
+
+
+def test_jump_forward_does_not_hang(nominal_log: Path, tmp_path: Path) -> None:
+    """The log goes on ten years later: a gap; at most 60 s of it is stepped, the rest skipped."""
+    lines = nominal_log.read_text().splitlines(keepends=True)
+    later = [line.replace("(00000000", "(03153600", 1) for line in lines[-200:]]
+    log = tmp_path / "jump.log"
+    log.write_text("".join(lines[:20000] + later))
+    t0 = time.monotonic()
+    rc, doc, _, _ = run_replay([str(log)], tmp_path)
+    assert time.monotonic() - t0 < 60
+    assert doc is not None and doc["data_quality"][0]["gap_count"] == 1
+    assert doc["logs"][0]["last_s"] > 315360000.0
+    assert doc["dtcs"] == []
+
+
+@pytest.mark.parametrize("core", [CORE, CORE_ASAN], ids=["release", "asan"])
+def test_damaged_files(core: Path, ia_log: Path, tmp_path: Path) -> None:
+    gz = gzip.compress(ia_log.read_bytes())
+    cut = tmp_path / "cut.log.gz"
+    cut.write_bytes(gz[: len(gz) * 2 // 3])
+    rc, doc, out, err = run_replay([str(cut)], tmp_path, core=core)
+    assert doc is not None, err
+    dq = doc["data_quality"][0]
+    assert dq["truncated"] and dq["read_errors"]
+    assert doc["logs"][0]["frames"] > 5000  # what was there was judged
+    junk = tmp_path / "junk.log"
+    junk.write_bytes(bytes((i * 7919 + 13) % 256 for i in range(200_000)))
+    rc, doc, out, err = run_replay([str(junk)], tmp_path, core=core)
+    assert rc == 3 and doc is not None and doc["data_quality"][0]["bad_line_count"] > 100
+    empty = tmp_path / "empty.log"
+    empty.write_text("")
+    rc, doc, out, err = run_replay([str(empty)], tmp_path, core=core)
+    assert rc == 3 and "nothing could be judged" in err
+    for head in (b"LOGG", b"XXXX"):  # BLF's signature, or not even that
+        blf = tmp_path / "junk.blf"
+        blf.write_bytes(head + bytes(range(256)) * 10)
+        rc, doc, out, err = run_replay([str(blf)], tmp_path, core=core)
+        assert rc == 3 and doc is not None and doc["data_quality"][0]["bad_lines"]
+
+
+def test_unusable_arguments(tmp_path: Path) -> None:
+    rc, doc, _, err = run_replay([str(tmp_path / "missing.log")], tmp_path)
+    assert rc == 2 and "no such file" in err
+    rc, _, _, err = run_replay([str(tmp_path)], tmp_path)
+    assert rc == 2 and "is a directory" in err
+    odd = tmp_path / "data.xyz"
+    odd.write_text("hello\n")
+    rc, _, _, err = run_replay([str(odd)], tmp_path)
+    assert rc == 2 and "unknown log format" in err
+
+
+# ------------------------------------------------------------ other projects' test logs
+
+def _sdist_members(name: str) -> list[tuple[str, bytes]]:
+    tgz = sorted(SDIST.glob(f"{name}-*.tar.gz"))
+    assert tgz, f"{SDIST}: no {name} sdist (make deps downloads it)"
+    with tarfile.open(tgz[-1]) as t:
+        return [(m.name, t.extractfile(m).read()) for m in t.getmembers()  # type: ignore[union-attr]
+                if m.isfile()]
+
+
+def test_python_can_test_logs(tmp_path: Path) -> None:
+    """Every log file of python-can's own test data: read, judged, nothing raised."""
+    files = [(n, b) for n, b in _sdist_members("python_can") if "/test/data/" in n and n.endswith(LOG_SUFFIXES)]
+    assert len(files) >= 15
+    seen_fd = seen_err = 0
+    for name, data in files:
+        p = tmp_path / Path(name).name
+        p.write_bytes(data)
+        t0 = time.monotonic()
+        rc, doc, out, err = run_replay([str(p)], tmp_path, core=CORE_ASAN)
+        assert time.monotonic() - t0 < 60, name
+        assert "Traceback" not in err and "runtime error" not in err and "AddressSanitizer" not in err, (name, err)
+        if rc == 2:  # a file python-can cannot read as its suffix says: a message, no crash
+            assert err.startswith("canfdi-replay:"), (name, err)
+            continue
+        assert rc in (0, 1, 3) and doc is not None, (name, rc, err)
+        seen_fd += doc["data_quality"][0]["fd_frames"]
+        seen_err += doc["data_quality"][0]["error_frames"]
+    assert seen_fd > 0 and seen_err > 0
+
+
+def test_cantools_test_log_lines(tmp_path: Path) -> None:
+    """The log lines of cantools' logreader tests (candump, candump -l, ASCII variants): a
+    candump -L line is a frame, every other line a bad line with its number and reason."""
+    src = next(b for n, b in _sdist_members("cantools") if n.endswith("tests/test_logreader.py"))
+    strings = [n.value for n in ast.walk(ast.parse(src)) if isinstance(n, ast.Constant) and isinstance(n.value, str)]
+    lines = [s for s in itertools.chain.from_iterable(x.splitlines() for x in strings)
+             if "can" in s and any(c.isdigit() for c in s) and s.strip() and not s.strip().startswith("#")]
+    assert len(lines) >= 40
+    p = tmp_path / "cantools_lines.log"
+    p.write_text("\n".join(lines) + "\n")
+    rc, doc, out, err = run_replay([str(p)], tmp_path, core=CORE_ASAN)
+    assert doc is not None, err
+    lg, dq = doc["logs"][0], doc["data_quality"][0]
+    assert lg["lines"] == len(lines)
+    assert lg["frames"] > 0 and dq["bad_line_count"] > 0
+    assert lg["frames"] + dq["bad_line_count"] == len(lines)
+    assert all(b["why"] for b in dq["bad_lines"])
