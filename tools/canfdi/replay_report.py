@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -66,8 +67,21 @@ CODE_MONITORS: dict[str, tuple[str, ...]] = {
 STATUS_BITS = ("TF", "TFTOC", "PDTC", "CDTC", "TNCSLC", "TFSLC", "TNCTOC", "WIR")
 DCM_CHANNELS = ("r1", "r2", "r3", "r4", "R_A", "Psi", "J", "M_c", "J/Psi", "UAC")
 THR_CHANNELS = ("CORR", "ARM", "POS1", "POS2", "R", "K", "spring", "friction", "-", "-")
-FLAG_NAMES = ("TPS1_LOW", "TPS1_HIGH", "TPS2_LOW", "TPS2_HIGH", "TPS1_OUTLIER", "TPS2_OUTLIER",
-              "BRIDGE_A_DEAD", "BRIDGE_B_DEAD", "THR_NOT_FOLLOWING", "THR_NO_CURRENT")
+SYMPTOMS_H = REPO_ROOT / "firmware" / "diag" / "canfdi_symptoms.h"
+
+
+def load_flag_names(path=SYMPTOMS_H) -> dict[int, str]:
+    """Bit number -> name of the firmware's symptom flags, read from the
+    header that defines them (CANFDI_SYM_F_<NAME> (1UL << <bit>)), so the
+    report names exactly the flags of the firmware it replays."""
+    names: dict[int, str] = {}
+    pat = re.compile(r"#define\s+CANFDI_SYM_F_(\w+)\s+\(1UL\s*<<\s*(\d+)\)")
+    for m in pat.finditer(path.read_text(encoding="utf-8")):
+        names[int(m.group(2))] = m.group(1)
+    return names
+
+
+FLAG_NAMES = load_flag_names()
 SYM_TEXT = {-1: "-", 0: "0", 1: "+", 2: "?"}
 DEG_NAMES = ("normal", "degraded", "fail_safe", "fail_silent")
 
@@ -408,7 +422,7 @@ class Report:
                           "normalised": {names[i]: round(x[i], 3) for i in range(len(names)) if names[i] != "-"},
                           "fired": fired, "result": why["res"][c]})
         ev["components"] = comps
-        ev["flags"] = [FLAG_NAMES[i] for i, s in enumerate(why.get("flag_sym", [])) if s in (1, -1)]
+        ev["flags"] = [FLAG_NAMES.get(i, f"flag{i}") for i, s in enumerate(why.get("flag_sym", [])) if s in (1, -1)]
         ev["residuals_over_threshold"] = {n: round(v, 3) for n, v in
                                           zip(("dcm r1", "dcm r2", "dcm r3", "dcm r4", "thr CORR", "thr ARM",
                                                "thr POS1", "thr POS2"), why["rn"]) if abs(v) >= 1.0}
