@@ -128,7 +128,7 @@ def gen_py(rows: list[dict[str, str]], ids: dict[str, int], root: Path) -> str:
          "    from udsoncan.client import Client",
          "    client = Client(conn, config=client_config())", '"""',
          "from __future__ import annotations", "", "import struct", "from typing import Any", "",
-         "import udsoncan", "", "",
+         "import udsoncan", "import udsoncan.configs", "", "",
          f"REQ_ID = 0x{ids['REQ']:03X}  # UdsPhysReq", f"RESP_ID = 0x{ids['RESP']:03X}  # UdsPhysResp",
          f"FUNC_ID = 0x{ids['FUNC']:03X}  # UdsFuncReq",
          "ISOTP_PADDING = 0xCC  # the ECU ignores frames shorter than 8 bytes", "",

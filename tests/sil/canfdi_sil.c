@@ -336,7 +336,7 @@ static int apply_action(const canfdi_sim_action_t *a, const canfdi_app_cal_t *ca
     /* power_cycle: the application's power-down (end the cycle, the image
      * to store), the store and load through the NVM port as canfdi-ecu
      * --nvm does it, and a cold start with the loaded image */
-    static uint8_t img[CANFDI_DTC_IMAGE_MAX_BYTES];
+    static uint8_t img[CANFDI_APP_IMAGE_MAX_BYTES];
     int32_t n = canfdi_app_power_down(&app, img, (uint32_t)sizeof img);
     if ((n < 0) || (canfdi_nvm_store(&sil_nvm, img, (uint32_t)n) != CANFDI_OK)) {
       (void)snprintf(msg, cap, "power_cycle at %.3f s: storing the DTC memory failed",

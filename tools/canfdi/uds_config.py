@@ -13,6 +13,7 @@ import struct
 from typing import Any
 
 import udsoncan
+import udsoncan.configs
 
 
 REQ_ID = 0x7E0  # UdsPhysReq

@@ -9,7 +9,7 @@
 #include <string.h>
 #include <time.h>
 
-CANFDI_STATIC_ASSERT(CANFDI_NVM_FOOTPRINT(CANFDI_DTC_IMAGE_MAX_BYTES, 1U) <= CANFDI_ECU_NVM_BANK_BYTES,
+CANFDI_STATIC_ASSERT(CANFDI_NVM_FOOTPRINT(CANFDI_APP_IMAGE_MAX_BYTES, 1U) <= CANFDI_ECU_NVM_BANK_BYTES,
                      ecu_nvm_bank_holds_the_dtc_image);
 
 static int64_t mono_ns(void)
@@ -44,7 +44,7 @@ static int32_t store(canfdi_ecu_nvm_t *n, const uint8_t *img, uint32_t len)
 
 static void *nvm_thread(void *arg)
 {
-  static uint8_t local[CANFDI_DTC_IMAGE_MAX_BYTES];
+  static uint8_t local[CANFDI_APP_IMAGE_MAX_BYTES];
   canfdi_ecu_nvm_t *n = (canfdi_ecu_nvm_t *)arg;
   bool quit = false;
   while (!quit) {
@@ -89,7 +89,7 @@ static uint32_t load(canfdi_ecu_nvm_t *n, uint8_t *buf, uint32_t cap)
 int canfdi_ecu_nvm_start(canfdi_ecu_nvm_t *n, const char *path, bool quiet, canfdi_app_t *app,
                          const canfdi_app_cal_t *cal, int64_t now_ns)
 {
-  static uint8_t buf[CANFDI_DTC_IMAGE_MAX_BYTES];
+  static uint8_t buf[CANFDI_APP_IMAGE_MAX_BYTES];
   int32_t rc = canfdi_nvm_file_open(&n->file, path, CANFDI_ECU_NVM_BANK_BYTES, CANFDI_NVM_FILE_CREATE);
   uint32_t len;
   n->path = path;
@@ -158,7 +158,7 @@ void canfdi_ecu_nvm_maybe_store(canfdi_ecu_nvm_t *n, const canfdi_app_t *app, in
 
 int canfdi_ecu_nvm_finish(canfdi_ecu_nvm_t *n, canfdi_app_t *app, bool do_store)
 {
-  static uint8_t buf[CANFDI_DTC_IMAGE_MAX_BYTES];
+  static uint8_t buf[CANFDI_APP_IMAGE_MAX_BYTES];
   int32_t len;
   int32_t rc = CANFDI_OK;
   if (!n->running) {

@@ -15,7 +15,7 @@
  * interrupted one (no healing step for it, as after a power cut on a real
  * ECU). Clean exit: canfdi_app_power_down ends the cycle and the image is
  * stored synchronously.
- * Memory: the instance holds two image buffers of CANFDI_DTC_IMAGE_MAX_BYTES
+ * Memory: the instance holds two image buffers of CANFDI_APP_IMAGE_MAX_BYTES
  * and the file port; static in the port.
  */
 #ifndef CANFDI_ECU_NVM_H
@@ -42,7 +42,7 @@ typedef struct {
   bool running;
   bool pending; /* under mu: an image waits for the thread */
   bool quit;    /* under mu */
-  uint8_t img[CANFDI_DTC_IMAGE_MAX_BYTES]; /* under mu */
+  uint8_t img[CANFDI_APP_IMAGE_MAX_BYTES]; /* under mu */
   uint32_t len;                            /* under mu */
   canfdi_nvm_file_t file;
   canfdi_nvm_t nvm;
