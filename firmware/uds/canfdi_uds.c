@@ -582,7 +582,7 @@ void canfdi_uds_default_cfg(canfdi_uds_cfg_t *cfg)
     cfg->p2star_ms = 5000U;
     cfg->s3_ms = 5000U;
     cfg->max_dids = 16U;
-    cfg->rest_rad_s_q16 = 5 * CANFDI_Q16_ONE;
+    cfg->rest_rad_s_q16 = 10 * CANFDI_Q16_ONE;
     cfg->ioc_speed_max_rad_s_q16 = 200 * CANFDI_Q16_ONE;
     cfg->ioc_angle_min_rad_q16 = 0;
     cfg->ioc_angle_max_rad_q16 = CANFDI_Q16_DEG(80, 1);
