@@ -479,6 +479,9 @@ int main(int argc, char **argv)
       printf("sizeof(canfdi_app_t) = %zu bytes (host; the target figure is in the .bss of "
              "make firmware)\n",
              sizeof(canfdi_app_t));
+      printf("  of which the diagnostic server sizeof(canfdi_uds_t) = %zu, its ISO-TP "
+             "sizeof(canfdi_isotp_t) = %zu\n",
+             sizeof(canfdi_uds_t), sizeof(canfdi_isotp_t));
       return EXIT_SUCCESS;
     } else if (v == NULL) {
       fprintf(stderr, "canfdi-sil: unknown option or missing value '%s'\nTry 'canfdi-sil --help'.\n",
