@@ -20,6 +20,9 @@
  *   cycle <t>                                 ECU: operation cycle ends, a new one starts
  *   clear <t> [<code>|all]                    ECU: ClearDiagnosticInformation
  *   power_cycle <t>                           ECU: DTC memory -> NVM, re-init, load
+ *   uds <t> <phys|func> <hex byte>... [expect <hex byte|..>... [*] | expect none]
+ *                                             a tester's UDS request and the
+ *                                             response it expects (SIL rig)
  *   expect <t> dtc <code> [pending|confirmed] | no_dtc |
  *          degradation <dcm|thr> <normal|degraded|fail_safe> |
  *          dtc_status <code> <bits> | occurrence <code> <n> |
@@ -32,7 +35,7 @@
  * rejected with "<file>:<line>: <message>" in err->msg; parsing stops at the
  * first error. Lines longer than CANFDI_SIM_SCN_LINE_MAX are errors.
  *
- * Cost: parsing is O(file size). Memory: sizeof(canfdi_sim_scn_t) ~ 17 kB
+ * Cost: parsing is O(file size). Memory: sizeof(canfdi_sim_scn_t) ~ 30 kB
  * (three profiles, CANFDI_SIM_MAX_FAULTS faults, CANFDI_SIM_SCN_MAX_EXPECT
  * expectations, CANFDI_SIM_SCN_MAX_ACTIONS actions), caller-owned; the file is read line by line into a stack
  * buffer. No heap.
@@ -50,6 +53,8 @@
 #define CANFDI_SIM_SCN_LINE_MAX 256U
 #define CANFDI_SIM_SCN_MAX_EXPECT 64U
 #define CANFDI_SIM_SCN_MAX_ACTIONS 64U
+#define CANFDI_SIM_SCN_MAX_UDS 64U
+#define CANFDI_SIM_SCN_UDS_BYTES 64U
 #define CANFDI_SIM_SCN_MAX_DURATION_S 1e5
 
 #define CANFDI_SIM_INIT_DCM_SPEED 0U
@@ -103,6 +108,22 @@ typedef struct {
   unsigned line;
 } canfdi_sim_action_t;
 
+/* A tester's UDS request (SIL rig only): sent at t_us (after the previous
+ * one's response), its response judged against the pattern. */
+typedef struct {
+  int64_t t_us;
+  bool functional;  /* UdsFuncReq 0x7DF (single frame), else UdsPhysReq 0x7E0 */
+  bool judged;      /* an `expect` part was given */
+  bool none;        /* expect none: no response at all */
+  bool any_tail;    /* the pattern ends with '*': any further bytes */
+  uint8_t req_len;
+  uint8_t pat_len;
+  uint8_t req[CANFDI_SIM_SCN_UDS_BYTES];
+  uint8_t pat[CANFDI_SIM_SCN_UDS_BYTES];
+  uint8_t pat_any[CANFDI_SIM_SCN_UDS_BYTES]; /* 1: '..', any byte */
+  unsigned line;
+} canfdi_sim_uds_t;
+
 typedef struct {
   double duration_s;
   canfdi_sim_cfg_t cfg;            /* plant parameters, noise, seed */
@@ -117,6 +138,8 @@ typedef struct {
   size_t n_expects;
   canfdi_sim_action_t actions[CANFDI_SIM_SCN_MAX_ACTIONS]; /* non-decreasing t_us */
   size_t n_actions;
+  canfdi_sim_uds_t uds[CANFDI_SIM_SCN_MAX_UDS]; /* non-decreasing t_us */
+  size_t n_uds;
 } canfdi_sim_scn_t;
 
 /* Name of a CANFDI_SIM_FF_* signal; "?" if out of range. */

@@ -47,6 +47,7 @@
 #include "canfdi_sim_frames.h"
 #include "canfdi_sim_rig.h"
 #include "canfdi_sim_scenario.h"
+#include "canfdi_sim_uds.h"
 #include "canfdi_sim_trace.h"
 #include "core/canfdi_common.h"
 #include "gen/canfdi_faults.h"
@@ -296,6 +297,47 @@ static canfdi_app_t app;  /* the firmware's whole state, as on a target */
 static canfdi_sim_scn_t scn;
 static canfdi_sim_t sim;
 static canfdi_sim_rig_t rig; /* the plant/vehicle side of a step (shared with HIL) */
+static canfdi_sim_uds_tester_t tester; /* the scenario's `uds` lines */
+
+/* The tester's frame of this step, if any, packed by the codec and handed
+ * to the ECU (the ECU's socket passes 0x7E0 and 0x7DF). */
+static void tester_send(FILE *log, const char *channel, int64_t t_us)
+{
+  bool functional = false;
+  uint8_t b[8];
+  if (canfdi_sim_uds_tester_tx(&tester, t_us, &functional, b)) {
+    uint8_t data[8];
+    uint64_t v = 0U;
+    uint32_t id;
+    for (unsigned i = 0U; i < 8U; i++) {
+      v = (v << 8) | b[i];
+    }
+    if (functional) {
+      struct canfdi_sil_msg_uds_func_req_t m = {v};
+      (void)canfdi_sil_msg_uds_func_req_pack(data, &m, sizeof data);
+      id = CANFDI_SIL_MSG_UDS_FUNC_REQ_FRAME_ID;
+    } else {
+      struct canfdi_sil_msg_uds_phys_req_t m = {v};
+      (void)canfdi_sil_msg_uds_phys_req_pack(data, &m, sizeof data);
+      id = CANFDI_SIL_MSG_UDS_PHYS_REQ_FRAME_ID;
+    }
+    (void)canfdi_app_rx_frame(&app, id, data, 8U, (uint32_t)t_us);
+    log_frame(log, channel, t_us, id, data, 8U);
+  }
+}
+
+/* An ECU frame for the tester: UdsPhysResp, unpacked by the codec. */
+static void tester_receive(const canfdi_tx_frame_t *f, int64_t t_us)
+{
+  struct canfdi_sil_msg_uds_phys_resp_t m;
+  if (canfdi_sil_msg_uds_phys_resp_unpack(&m, f->data, f->dlc) == 0) {
+    uint8_t b[8];
+    for (unsigned i = 0U; i < 8U; i++) {
+      b[i] = (uint8_t)(m.uds_phys_resp_data >> (8U * (7U - i)));
+    }
+    canfdi_sim_uds_tester_rx(&tester, t_us, b);
+  }
+}
 
 /* What the ECU's SocketCAN filter passes to the application (HIL contract):
  * the setpoints and the sensor frames, not SimPlantStatus. */
@@ -576,6 +618,7 @@ int main(int argc, char **argv)
     return EXIT_USAGE;
   }
   (void)canfdi_sim_rig_init(&rig, &scn, &sim, (uint8_t)CANFDI_SIM_MODE_LOCKSTEP);
+  canfdi_sim_uds_tester_init(&tester, scn.uds, scn.n_uds);
   n_steps = (uint64_t)llround(scn.duration_s * 1000.0);
   if (!quiet) {
     printf("canfdi-sil: %s, %.3f s, seed %llu, %zu fault(s)\n", scn_path, scn.duration_s,
@@ -620,6 +663,7 @@ int main(int argc, char **argv)
       }
       log_frame(log, channel, t_us, pf[j].id, pf[j].data, pf[j].dlc);
     }
+    tester_send(log, channel, t_us);
     /* the ECU's step */
     if (timing) {
       struct timespec t0;
@@ -644,7 +688,9 @@ int main(int argc, char **argv)
       rf.dlc = f->dlc;
       memcpy(rf.data, f->data, sizeof rf.data);
       rx = canfdi_sim_rig_rx(&rig, &rf, NULL);
-      if (rx == CANFDI_SIM_RIG_RX_ACT_DCM) {
+      if (f->id == CANFDI_SIL_MSG_UDS_PHYS_RESP_FRAME_ID) {
+        tester_receive(f, t_us);
+      } else if (rx == CANFDI_SIM_RIG_RX_ACT_DCM) {
         if (!quiet && (in->dcm.bridge != last_bridge)) {
           printf("  %8.3f  dcm: power stage %s -> %s\n", (double)t_us * 1e-6,
                  (last_bridge == 1U) ? "A" : ((last_bridge == 2U) ? "B" : "none"),
@@ -767,6 +813,12 @@ int main(int argc, char **argv)
   /* the DTC expectations and the implicit "nothing else" */
   if (!quiet) {
     printf("\n");
+  }
+  canfdi_sim_uds_tester_finish(&tester);
+  for (i = 0U; i < scn.n_uds; i++) {
+    printf("%s  %s:%u: %s\n", tester.verdict[i].ok ? "PASS" : "FAIL", scn_path, scn.uds[i].line,
+           tester.verdict[i].msg);
+    failures += tester.verdict[i].ok ? 0 : 1;
   }
   for (i = 0U; i < scn.n_expects; i++) {
     if (!expect_done[i] && is_state_expect(&scn.expects[i])) {
