@@ -14,6 +14,7 @@ CANFDI_STATIC_ASSERT(CANFDI_CFG_ISOTP_FRAME_BYTES == CANFDI_MSG_UDS_PHYS_RESP_LE
 /* A request must hold more than a single frame; lengths fit 32 bits. */
 CANFDI_STATIC_ASSERT(CANFDI_CFG_ISOTP_RX_BYTES > CANFDI_ISOTP_SF_MAX, isotp_rx_buffer_size);
 CANFDI_STATIC_ASSERT(CANFDI_CFG_ISOTP_TX_BYTES > CANFDI_ISOTP_SF_MAX, isotp_tx_buffer_size);
+CANFDI_STATIC_ASSERT((CANFDI_CFG_ISOTP_SF_QUEUE >= 1U) && (CANFDI_CFG_ISOTP_SF_QUEUE <= 255U), isotp_sf_queue_size);
 
 #define DL CANFDI_CFG_ISOTP_FRAME_BYTES
 #define PCI_SF 0U
@@ -85,7 +86,9 @@ void canfdi_isotp_reset(canfdi_isotp_t *t)
     rx_idle(t);
     tx_idle(t);
     t->fc_pending = 0U;
-    t->func_len = 0U;
+    t->sfq_head = 0U;
+    t->sfq_len = 0U;
+    t->peeked = 0U;
   }
 }
 
@@ -242,48 +245,48 @@ static void tx_flow_control(canfdi_isotp_t *t, const uint8_t f[DL])
   }
 }
 
+/* A complete single frame into the queue (or dropped when it is full). */
+static void rx_single(canfdi_isotp_t *t, const uint8_t f[DL], bool functional)
+{
+  uint32_t len;
+  uint32_t off;
+  if (!sf_length(f, &len, &off)) {
+    canfdi_count_inc(&t->diag.bad_length);
+  } else if (t->sfq_len >= CANFDI_CFG_ISOTP_SF_QUEUE) {
+    canfdi_count_inc(&t->diag.busy_dropped);
+  } else {
+    const uint32_t k = (t->sfq_head + t->sfq_len) % CANFDI_CFG_ISOTP_SF_QUEUE;
+    copy_in(t->sfq[k].data, &f[off], len);
+    t->sfq[k].len = (uint8_t)len;
+    t->sfq[k].functional = functional;
+    t->sfq_len++;
+    canfdi_count_inc(&t->diag.rx_messages);
+  }
+}
+
 /* A new request (SF or FF) on the physical address. */
 static void rx_physical_start(canfdi_isotp_t *t, const uint8_t f[DL], uint8_t type)
 {
-  if ((t->tx_state != (uint8_t)CANFDI_ISOTP_TX_IDLE) || (t->rx_state == (uint8_t)CANFDI_ISOTP_RX_DONE)) {
+  if (t->rx_state == (uint8_t)CANFDI_ISOTP_RX_RECEIVING) {
+    /* ISO 15765-2: a new SF/FF ends the reception in progress */
+    canfdi_count_inc(&t->diag.rx_restarted);
+    rx_idle(t);
+  }
+  if (type == PCI_SF) {
+    rx_single(t, f, false);
+  } else if ((t->tx_state != (uint8_t)CANFDI_ISOTP_TX_IDLE) || (t->rx_state == (uint8_t)CANFDI_ISOTP_RX_DONE)) {
     canfdi_count_inc(&t->diag.busy_dropped);
   } else {
-    if (t->rx_state == (uint8_t)CANFDI_ISOTP_RX_RECEIVING) {
-      canfdi_count_inc(&t->diag.rx_restarted);
-      rx_idle(t);
-    }
-    if (type == PCI_FF) {
-      rx_first(t, f);
-    } else {
-      uint32_t len;
-      uint32_t off;
-      if (sf_length(f, &len, &off)) {
-        copy_in(t->rx_buf, &f[off], len);
-        t->rx_len = len;
-        t->rx_got = len;
-        t->rx_state = (uint8_t)CANFDI_ISOTP_RX_DONE;
-        canfdi_count_inc(&t->diag.rx_messages);
-      } else {
-        canfdi_count_inc(&t->diag.bad_length);
-      }
-    }
+    rx_first(t, f);
   }
 }
 
 static void rx_functional(canfdi_isotp_t *t, const uint8_t f[DL], uint8_t type)
 {
-  uint32_t len;
-  uint32_t off;
   if (type != PCI_SF) {
     canfdi_count_inc(&t->diag.func_ignored);
-  } else if (!sf_length(f, &len, &off)) {
-    canfdi_count_inc(&t->diag.bad_length);
-  } else if ((t->tx_state != (uint8_t)CANFDI_ISOTP_TX_IDLE) || (t->func_len != 0U)) {
-    canfdi_count_inc(&t->diag.busy_dropped);
   } else {
-    copy_in(t->func_buf, &f[off], len);
-    t->func_len = (uint8_t)len;
-    canfdi_count_inc(&t->diag.rx_messages);
+    rx_single(t, f, true);
   }
 }
 
@@ -314,18 +317,21 @@ int32_t canfdi_isotp_rx_can(canfdi_isotp_t *t, bool functional, const uint8_t *d
   return rc;
 }
 
-uint32_t canfdi_isotp_rx_peek(const canfdi_isotp_t *t, const uint8_t **msg, bool *functional)
+uint32_t canfdi_isotp_rx_peek(canfdi_isotp_t *t, const uint8_t **msg, bool *functional)
 {
   uint32_t len = 0U;
   if (usable(t) && (msg != NULL) && (functional != NULL)) {
+    t->peeked = 0U;
     if (t->rx_state == (uint8_t)CANFDI_ISOTP_RX_DONE) {
       *msg = t->rx_buf;
       *functional = false;
       len = t->rx_len;
-    } else if (t->func_len != 0U) {
-      *msg = t->func_buf;
-      *functional = true;
-      len = t->func_len;
+      t->peeked = 1U;
+    } else if (t->sfq_len != 0U) {
+      *msg = t->sfq[t->sfq_head].data;
+      *functional = t->sfq[t->sfq_head].functional;
+      len = t->sfq[t->sfq_head].len;
+      t->peeked = 2U;
     } else {
       /* nothing waits */
     }
@@ -333,16 +339,18 @@ uint32_t canfdi_isotp_rx_peek(const canfdi_isotp_t *t, const uint8_t **msg, bool
   return len;
 }
 
-void canfdi_isotp_rx_release(canfdi_isotp_t *t, bool functional)
+void canfdi_isotp_rx_release(canfdi_isotp_t *t)
 {
   if (usable(t)) {
-    if (functional) {
-      t->func_len = 0U;
-    } else if (t->rx_state == (uint8_t)CANFDI_ISOTP_RX_DONE) {
+    if ((t->peeked == 1U) && (t->rx_state == (uint8_t)CANFDI_ISOTP_RX_DONE)) {
       rx_idle(t);
+    } else if ((t->peeked == 2U) && (t->sfq_len != 0U)) {
+      t->sfq_head = (uint8_t)((t->sfq_head + 1U) % CANFDI_CFG_ISOTP_SF_QUEUE);
+      t->sfq_len--;
     } else {
-      /* nothing to release */
+      /* nothing peeked */
     }
+    t->peeked = 0U;
   }
 }
 

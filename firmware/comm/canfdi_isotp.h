@@ -32,12 +32,17 @@
  * sequence number (diag.wrong_sn), no CF within cfg.n_cr_ms (diag.timeout_cr),
  * a CF while no reception runs (diag.unexpected, ignored), a new SF/FF
  * during a reception (diag.rx_restarted: the new one starts), an unknown
- * PCI type (diag.unexpected). A request that arrives while the previous
- * response is still being sent is dropped (diag.busy_dropped): the server
- * answers one request at a time.
+ * PCI type (diag.unexpected).
+ * Complete single-frame requests (physical or functional) wait in a queue
+ * of CANFDI_CFG_ISOTP_SF_QUEUE entries, in arrival order, so that requests
+ * sent back to back (a TesterPresent with suppressed response, then the
+ * next request, within one step), or while a response is being sent, are
+ * all answered, one per step; a full queue drops the new one
+ * (diag.busy_dropped). A first frame while a segmented request waits for
+ * the server or a response is being sent is dropped the same way (the
+ * tester's N_Bs expires): the server answers one request at a time.
  * Reception (functional): single frames only; FF, CF and FC on 0x7DF are
- * ignored and counted (diag.func_ignored). A functional request is kept
- * apart from the physical one (its own buffer of CAN_DL - 1 bytes).
+ * ignored and counted (diag.func_ignored).
  *
  * Transmission. canfdi_isotp_send() after writing the response into
  * canfdi_isotp_tx_buf(): up to CAN_DL - 1 bytes as an SF, else an FF, then
@@ -59,8 +64,9 @@
  * most one frame build (CAN_DL bytes). Measured with the application (see
  * app/canfdi_app.h for the step with a request in flight).
  * Memory: sizeof(canfdi_isotp_t) = CANFDI_CFG_ISOTP_RX_BYTES +
- * CANFDI_CFG_ISOTP_TX_BYTES + CAN_DL - 1 + about 80 bytes on a 32-bit
- * target (default 128 + 256 + 7 + 80 = 471, printed by `canfdi-sil --sizes`).
+ * CANFDI_CFG_ISOTP_TX_BYTES + 9 x CANFDI_CFG_ISOTP_SF_QUEUE + about 110
+ * bytes on a 32-bit target (default 128 + 256 + 36 + 110 = 528; the exact
+ * figure is printed by `canfdi-sil --sizes` for the host).
  */
 #ifndef CANFDI_ISOTP_H
 #define CANFDI_ISOTP_H
@@ -80,6 +86,10 @@
 /* Largest response, bytes (RAM 1 byte each): 0x19 0x0A over 30 DTCs is 123. */
 #ifndef CANFDI_CFG_ISOTP_TX_BYTES
 #define CANFDI_CFG_ISOTP_TX_BYTES 256U
+#endif
+/* Single-frame requests waiting for the server (RAM 9 bytes each). */
+#ifndef CANFDI_CFG_ISOTP_SF_QUEUE
+#define CANFDI_CFG_ISOTP_SF_QUEUE 4U
 #endif
 /* Padding byte of sent frames. */
 #ifndef CANFDI_CFG_ISOTP_PAD_BYTE
@@ -114,7 +124,7 @@ typedef struct {
   uint32_t rx_restarted;  /* SF/FF during a reception */
   uint32_t unexpected;    /* CF/FC out of place, unknown PCI */
   uint32_t func_ignored;  /* functional FF/CF/FC */
-  uint32_t busy_dropped;  /* request while a response was being sent */
+  uint32_t busy_dropped;  /* request dropped: queue full, or a FF while busy */
 } canfdi_isotp_diag_t;
 
 typedef enum {
@@ -142,9 +152,15 @@ typedef struct {
   uint8_t rx_sn;         /* next expected sequence number */
   uint8_t rx_block;      /* CFs left in this block (cfg.bs != 0) */
   uint8_t fc_pending;    /* 0 none, else the FC's first byte (0x30 or 0x32) */
-  /* reception (functional) */
-  uint8_t func_buf[CANFDI_ISOTP_SF_MAX];
-  uint8_t func_len;      /* 0: none waiting */
+  /* single-frame requests waiting, in arrival order */
+  struct {
+    uint8_t len;
+    bool functional;
+    uint8_t data[CANFDI_ISOTP_SF_MAX];
+  } sfq[CANFDI_CFG_ISOTP_SF_QUEUE];
+  uint8_t sfq_head;
+  uint8_t sfq_len;
+  uint8_t peeked;        /* 1: the segmented request, 2: the queue's head */
   /* transmission */
   uint8_t tx_buf[CANFDI_CFG_ISOTP_TX_BYTES];
   uint32_t tx_len;
@@ -181,12 +197,12 @@ int32_t canfdi_isotp_rx_can(canfdi_isotp_t *t, bool functional, const uint8_t *d
 /*
  * A complete request, if one waits: sets *functional, returns its length
  * (> 0) and points *msg at it (valid until canfdi_isotp_rx_release); 0 if
- * none. A physical request waits before a functional one. O(1).
+ * none. A segmented request comes before the queued single frames. O(1).
  */
-uint32_t canfdi_isotp_rx_peek(const canfdi_isotp_t *t, const uint8_t **msg, bool *functional);
+uint32_t canfdi_isotp_rx_peek(canfdi_isotp_t *t, const uint8_t **msg, bool *functional);
 
 /* The server is done with the request canfdi_isotp_rx_peek returned. O(1). */
-void canfdi_isotp_rx_release(canfdi_isotp_t *t, bool functional);
+void canfdi_isotp_rx_release(canfdi_isotp_t *t);
 
 /* True while a response is being sent (a new one must wait). */
 bool canfdi_isotp_tx_busy(const canfdi_isotp_t *t);

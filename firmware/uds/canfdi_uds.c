@@ -644,7 +644,7 @@ int32_t canfdi_uds_step(canfdi_uds_t *u, canfdi_dtc_t *dtc, const canfdi_uds_src
       const uint32_t len = canfdi_isotp_rx_peek(&u->tp, &req, &c.functional);
       if (len > 0U) {
         serve(u, &c, req, len);
-        canfdi_isotp_rx_release(&u->tp, c.functional);
+        canfdi_isotp_rx_release(&u->tp);
       }
     }
     rc = canfdi_isotp_step(&u->tp, frame);

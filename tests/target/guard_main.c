@@ -798,7 +798,7 @@ static void guard_uds(void)
   sink32(canfdi_isotp_init(&tp, &tcfg));
   sink32(canfdi_isotp_rx_can(&tp, (in_n & 1U) != 0U, frame, (uint8_t)in_n));
   sinku64(canfdi_isotp_rx_peek(&tp, &msg, &fn) + (fn ? 1U : 0U));
-  canfdi_isotp_rx_release(&tp, fn);
+  canfdi_isotp_rx_release(&tp);
   sink32(canfdi_isotp_tx_busy(&tp) ? 1 : 0);
   sinku64((uint64_t)(uintptr_t)canfdi_isotp_tx_buf(&tp));
   sink32(canfdi_isotp_send(&tp, in_u32));

@@ -833,6 +833,44 @@ START_TEST(test_isotp_errors)
 }
 END_TEST
 
+/* Requests back to back within one step, and during a segmented response:
+ * queued and answered one per step, in order; a full queue drops. */
+START_TEST(test_back_to_back)
+{
+  uint8_t f[8];
+  const canfdi_isotp_diag_t *d = &app.uds.tp.diag;
+  canfdi_app_default_cal(&cal);
+  loop_setup(AT_REST);
+  run_ms(20U);
+  send_raw(FUNC, (const uint8_t[]){0x02, 0x3E, 0x80, 0xCC, 0xCC, 0xCC, 0xCC, 0xCC}, 8U);
+  send_raw(PHYS, (const uint8_t[]){0x03, 0x22, 0xD5, 0x09, 0xCC, 0xCC, 0xCC, 0xCC}, 8U);
+  ck_assert(wait_frame(f, 5U));
+  ck_assert_mem_eq(f, ((const uint8_t[]){0x04, 0x62, 0xD5, 0x09, 0x00}), 5);
+  /* a long response in flight: the next request waits for it */
+  send_raw(PHYS, (const uint8_t[]){0x02, 0x19, 0x0A, 0xCC, 0xCC, 0xCC, 0xCC, 0xCC}, 8U);
+  ck_assert(wait_frame(f, 5U));
+  ck_assert_uint_eq(f[0] >> 4, 1U);
+  send_raw(PHYS, (const uint8_t[]){0x02, 0x3E, 0x00, 0xCC, 0xCC, 0xCC, 0xCC, 0xCC}, 8U);
+  send_raw(PHYS, (const uint8_t[]){0x30, 0x00, 0x00, 0xCC, 0xCC, 0xCC, 0xCC, 0xCC}, 8U);
+  for (uint32_t k = 0U; k < 17U; k++) {
+    ck_assert(wait_frame(f, 5U));
+    ck_assert_uint_eq(f[0], 0x20U | ((k + 1U) & 0x0FU));
+  }
+  ck_assert(wait_frame(f, 5U));
+  ck_assert_mem_eq(f, ((const uint8_t[]){0x02, 0x7E, 0x00}), 3);
+  /* more single frames in one step than the queue holds */
+  for (uint32_t k = 0U; k <= CANFDI_CFG_ISOTP_SF_QUEUE; k++) {
+    send_raw(PHYS, (const uint8_t[]){0x02, 0x3E, 0x00, 0xCC, 0xCC, 0xCC, 0xCC, 0xCC}, 8U);
+  }
+  ck_assert_uint_eq(d->busy_dropped, 1U);
+  for (uint32_t k = 0U; k < CANFDI_CFG_ISOTP_SF_QUEUE; k++) {
+    ck_assert(wait_frame(f, 5U));
+    ck_assert_uint_eq(f[1], 0x7EU);
+  }
+  ck_assert(!wait_frame(f, 20U));
+}
+END_TEST
+
 /* The transport's own argument checks and a CAN FD-length escape. */
 START_TEST(test_isotp_api)
 {
@@ -855,6 +893,7 @@ START_TEST(test_isotp_api)
   ck_assert_int_eq(canfdi_isotp_send(&t, CANFDI_CFG_ISOTP_TX_BYTES + 1U), -CANFDI_ERANGE);
   ck_assert_int_eq(canfdi_isotp_step(&t, f), 0);
   ck_assert_uint_eq(canfdi_isotp_rx_peek(&t, &msg, &fn), 0U);
+  canfdi_isotp_rx_release(&t);
   /* a 7-byte single frame, padded */
   canfdi_isotp_tx_buf(&t)[0] = 0x62U;
   for (uint32_t k = 1U; k < 7U; k++) {
@@ -895,6 +934,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_ecu_reset_and_comm_control);
   tcase_add_test(tc, test_image_versions);
   tcase_add_test(tc, test_isotp_errors);
+  tcase_add_test(tc, test_back_to_back);
   suite_add_tcase(s, tc);
   return s;
 }

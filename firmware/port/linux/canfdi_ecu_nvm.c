@@ -156,6 +156,31 @@ void canfdi_ecu_nvm_maybe_store(canfdi_ecu_nvm_t *n, const canfdi_app_t *app, in
   }
 }
 
+int canfdi_ecu_nvm_restart(canfdi_ecu_nvm_t *n, canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us,
+                           int64_t now_ns)
+{
+  static uint8_t buf[CANFDI_APP_IMAGE_MAX_BYTES];
+  const int32_t len = canfdi_app_power_down(app, buf, (uint32_t)sizeof buf);
+  int32_t rc = -CANFDI_EINVAL;
+  if (len >= 0) {
+    if (n->running) {
+      (void)pthread_mutex_lock(&n->mu);
+      memcpy(n->img, buf, (size_t)len);
+      n->len = (uint32_t)len;
+      n->pending = true;
+      (void)pthread_cond_signal(&n->cv);
+      (void)pthread_mutex_unlock(&n->mu);
+    }
+    rc = canfdi_app_power_up(app, cal, now_us, buf, (uint32_t)len);
+  }
+  n->changes_seen = canfdi_app_nvm_changes(app);
+  n->last_ns = now_ns;
+  if (rc != CANFDI_OK) {
+    fprintf(stderr, CANFDI_ECU_PROG ": ECU reset: the application did not power up again (%d)\n", (int)rc);
+  }
+  return (rc == CANFDI_OK) ? 0 : 1;
+}
+
 int canfdi_ecu_nvm_finish(canfdi_ecu_nvm_t *n, canfdi_app_t *app, bool do_store)
 {
   static uint8_t buf[CANFDI_APP_IMAGE_MAX_BYTES];

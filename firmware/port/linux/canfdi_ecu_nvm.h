@@ -61,6 +61,13 @@ int canfdi_ecu_nvm_start(canfdi_ecu_nvm_t *n, const char *path, bool quiet, canf
 /* Outside the step: hands a new image to the thread when due. */
 void canfdi_ecu_nvm_maybe_store(canfdi_ecu_nvm_t *n, const canfdi_app_t *app, int64_t now_ns);
 
+/* ECUReset: powers the app down, hands the image to the background store
+ * (the next power-up's image) and powers the app up from it at now_us.
+ * Returns 0, or 1 with a message on stderr. Without a started NVM the
+ * image goes from power-down to power-up in RAM. */
+int canfdi_ecu_nvm_restart(canfdi_ecu_nvm_t *n, canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us,
+                           int64_t now_ns);
+
 /* Stops the thread; with store, powers the app down and stores its image.
  * Returns 0, or 1 with a message on stderr. No-op (0) when not started. */
 int canfdi_ecu_nvm_finish(canfdi_ecu_nvm_t *n, canfdi_app_t *app, bool store);
