@@ -57,6 +57,7 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
   make sil-pil              instructions per step on QEMU (Cortex-M4/M0+ code), frames vs SIL
+  make sil-pil-uds          the same with a tester's UDS requests in flight (uds_workshop.scn)
 
 Code
   make dbc-gen              regenerate the C codecs and tables after editing dbc/

@@ -108,6 +108,22 @@ $(BUILD)/pil/pil_step_%.elf: tests/sil/pil_step.c $(FW_SRC) firmware/port/cortex
 	@mkdir -p $(@D)
 	$(ARM_CC) $(TGT_ARCH_$*) $(TGT_CFLAGS) $(PIL_LDFLAGS) -o $@ $(filter %.c,$^)
 
+# The same with the tester's UDS requests of tests/sil/scenarios/
+# uds_workshop.scn: the step's cost with a diagnostic request in flight.
+SIL_PIL_UDS_LOG := $(BUILD)/pil/uds_workshop.log
+SIL_PIL_UDS_ELFS := $(foreach c,$(SIL_PIL_CORES),$(BUILD)/pil/pil_uds_$(c).elf)
+$(BUILD)/pil/pil_uds_%.elf: tests/sil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPT)
+	@mkdir -p $(@D)
+	$(ARM_CC) $(TGT_ARCH_$*) $(TGT_CFLAGS) '-DPIL_LOG="$(SIL_PIL_UDS_LOG)"' $(PIL_LDFLAGS) -o $@ $(filter %.c,$^)
+
+.PHONY: sil-pil-uds
+sil-pil-uds: $(SIL_BIN) $(SIL_PIL_UDS_ELFS)
+	@mkdir -p $(dir $(SIL_PIL_UDS_LOG))
+	@$(SIL_BIN) -q -s tests/sil/scenarios/uds_workshop.scn -l $(SIL_PIL_UDS_LOG) >/dev/null
+	@set -e; for c in $(SIL_PIL_CORES); do echo "== $$c code"; \
+	  qemu-system-arm -M mps2-an386 -nographic -icount shift=6 \
+	    -semihosting-config enable=on,target=native -kernel $(BUILD)/pil/pil_uds_$$c.elf; done
+
 .PHONY: sil-pil
 sil-pil: $(SIL_BIN) $(SIL_PIL_ELFS)
 	@mkdir -p $(dir $(SIL_PIL_LOG))

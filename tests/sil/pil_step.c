@@ -9,7 +9,10 @@
  *   qemu-system-arm -M mps2-an386 -nographic -icount shift=6 \
  *     -semihosting-config enable=on,target=native -kernel pil_step.elf
  * reads build/demo/canfdi-demo.log (candump -L of `make demo`) relative to
- * QEMU's working directory.
+ * QEMU's working directory, or the log named by -DPIL_LOG. A log with a
+ * tester's UDS requests (`make sil-pil-uds`: tests/sil/scenarios/
+ * uds_workshop.scn) feeds them to the ECU too, and the steps in which a
+ * request or response is in flight are reported on their own.
  *
  * With -icount shift=6 SysTick (CLKSOURCE = core clock) advances 1.6 counts
  * per executed instruction (docs/design.md, facts about the build machines),
@@ -20,6 +23,10 @@
 #include <string.h>
 
 #include "app/canfdi_app.h"
+
+#ifndef PIL_LOG
+#define PIL_LOG "build/demo/canfdi-demo.log"
+#endif
 
 #define SYST_CSR (*(volatile uint32_t *)0xE000E010U)
 #define SYST_RVR (*(volatile uint32_t *)0xE000E014U)
@@ -47,6 +54,11 @@ static uint32_t steps;
 static uint32_t max_step;
 static uint32_t mismatches;
 static uint32_t compared;
+/* steps with a UDS frame received before them or sent by them */
+static bool uds_rx_this_step;
+static uint32_t uds_steps;
+static uint32_t uds_ticks_max;
+static uint32_t uds_max_step;
 
 static int hexval(char c)
 {
@@ -113,7 +125,8 @@ static int parse_line(const char *s, uint32_t *t_us, logged_t *f)
 
 static bool is_ecu_rx(uint32_t id)
 {
-  return (id == 0x010U) || (id == 0x011U) || (id == 0x100U) || (id == 0x101U);
+  return (id == 0x010U) || (id == 0x011U) || (id == 0x100U) || (id == 0x101U) || (id == 0x7E0U) ||
+         (id == 0x7DFU);
 }
 
 static void do_step(uint32_t t_us)
@@ -135,6 +148,20 @@ static void do_step(uint32_t t_us)
   if (d > ticks_max) {
     ticks_max = d;
     max_step = steps;
+  }
+  {
+    bool uds = uds_rx_this_step;
+    for (i = 0; i < n; i++) {
+      uds = uds || (out[i].id == 0x7E8U);
+    }
+    if (uds) {
+      uds_steps++;
+      if (d > uds_ticks_max) {
+        uds_ticks_max = d;
+        uds_max_step = steps;
+      }
+    }
+    uds_rx_this_step = false;
   }
   steps++;
   compared++;
@@ -167,9 +194,9 @@ int main(void)
     printf("pil: init failed\n");
     exit(2);
   }
-  f = fopen("build/demo/canfdi-demo.log", "r");
+  f = fopen(PIL_LOG, "r");
   if (f == NULL) {
-    printf("pil: cannot open build/demo/canfdi-demo.log (run make demo first)\n");
+    printf("pil: cannot open %s (run make demo first)\n", PIL_LOG);
     exit(2);
   }
   while (fgets(line, (int)sizeof line, f) != NULL) {
@@ -185,6 +212,7 @@ int main(void)
     have = true;
     if (is_ecu_rx(fr.id)) {
       (void)canfdi_app_rx_frame(&app, fr.id, fr.data, fr.dlc, t_us);
+      uds_rx_this_step = uds_rx_this_step || (fr.id >= 0x7DFU);
     } else if ((fr.id >= 0x020U) && (fr.id != 0x610U) && (n_logged < 8U)) {
       logged[n_logged++] = fr;
     } else {
@@ -199,6 +227,10 @@ int main(void)
          (unsigned long)steps, (unsigned long)((ticks_min * 5U) / 8U),
          (unsigned long)((ticks_sum * 5U) / (8U * (steps ? steps : 1U))),
          (unsigned long)((ticks_max * 5U) / 8U), (unsigned long)max_step);
+  if (uds_steps > 0U) {
+    printf("pil: %lu steps with a UDS request or response in flight: instructions max %lu (step %lu)\n",
+           (unsigned long)uds_steps, (unsigned long)((uds_ticks_max * 5U) / 8U), (unsigned long)uds_max_step);
+  }
   printf("pil: ECU frames compared with the host SIL run: %lu steps, %lu differ\n",
          (unsigned long)compared, (unsigned long)mismatches);
   /* exit() ends the emulation through semihosting (returning from main
