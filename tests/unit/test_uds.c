@@ -362,6 +362,36 @@ START_TEST(test_security_access)
 }
 END_TEST
 
+/* The default key: the same known answers as the tester's copy
+ * (tests/tools/test_uds_tool.py), and a replaced key function. */
+static uint32_t other_key(uint32_t seed, uint8_t level) { return ~seed + level; }
+
+START_TEST(test_key_function)
+{
+  uint8_t r[64];
+  uint8_t key[6] = {0x27, 0x02, 0, 0, 0, 0};
+  uint32_t seed;
+  uint32_t k;
+  ck_assert_uint_eq(canfdi_uds_sec_key_default(0x12345678U, 1U), 0x67FFB80FU);
+  ck_assert_uint_eq(canfdi_uds_sec_key_default(0xA4E25C5FU, 1U), 0x354BA250U);
+  ck_assert_uint_eq(canfdi_uds_sec_key_default(0x00000001U, 2U), 0xDCA97096U);
+  canfdi_app_default_cal(&cal);
+  cal.uds.sec.key_fn = other_key;
+  loop_setup(AT_REST);
+  run_ms(20U);
+  extended();
+  ck_assert_int_eq(uds(REQ(0x27, 0x01), r), 6);
+  seed = ((uint32_t)r[2] << 24) | ((uint32_t)r[3] << 16) | ((uint32_t)r[4] << 8) | r[5];
+  k = other_key(seed, 1U);
+  key[2] = (uint8_t)(k >> 24);
+  key[3] = (uint8_t)(k >> 16);
+  key[4] = (uint8_t)(k >> 8);
+  key[5] = (uint8_t)k;
+  ck_assert_int_eq(uds(key, 6U, r), 2);
+  ck_assert_uint_eq(canfdi_uds_sec_level(&app.uds.sec), 1U);
+}
+END_TEST
+
 /* Two levels: a key for another level than the seed's is a sequence error. */
 START_TEST(test_security_levels)
 {
@@ -924,6 +954,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_session_control);
   tcase_add_test(tc, test_security_access);
   tcase_add_test(tc, test_security_levels);
+  tcase_add_test(tc, test_key_function);
   tcase_add_test(tc, test_read_dtc_information);
   tcase_add_test(tc, test_clear_dtc);
   tcase_add_test(tc, test_read_data);

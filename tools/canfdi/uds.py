@@ -150,8 +150,9 @@ def cmd_info(t: Tester, a: argparse.Namespace) -> int:
 def cmd_dtc(t: Tester, a: argparse.Namespace) -> int:
     r = check(t.c.get_dtc_by_status_mask(a.mask), "ReadDTCInformation 0x02")
     dtcs = r.service_data.dtcs
-    print(f"{len(dtcs)} trouble code(s) with status & 0x{a.mask:02X} (availability mask "
-          f"0x{r.service_data.dtc_availability_mask or 0:02X})")
+    avail = r.service_data.status_availability
+    avail_byte = avail.get_byte_as_int() if avail is not None else 0
+    print(f"{len(dtcs)} trouble code(s) with status & 0x{a.mask:02X} (availability mask 0x{avail_byte:02X})")
     for d in dtcs:
         st = d.status.get_byte_as_int()
         desc = uds_config.DTCS.get(d.id, ("?", "not in dbc/dtcs.csv"))[1]
@@ -210,7 +211,9 @@ def cmd_routine(t: Tester, a: argparse.Namespace) -> int:
     if a.routine == "estimator-reset":
         mask = (1 if a.dcm else 0) | (2 if a.thr else 0) or 3
         r = check(t.c.start_routine(0x0201, bytes([mask])), "RoutineControl start")
-        print(f"estimator reset (mask {mask}): {ROUTINE_STATUS.get(r.service_data.routine_status_record[0], '?')}")
+        done = r.service_data.routine_status_record[:1] == b"\x01"
+        print(f"estimator reset ({'DC motor' if mask == 1 else 'throttle' if mask == 2 else 'both'}): "
+              f"{'done' if done else 'not done'}")
         return 0
     check(t.c.start_routine(0x0202), "RoutineControl start")
     status = 0
@@ -254,7 +257,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="cmd", required=True)
     sub.add_parser("info", help="identification: software version, calibration id, serial")
     s = sub.add_parser("dtc", help="trouble codes by status mask, with status bits and description")
-    s.add_argument("--mask", type=lambda x: int(x, 0), default=0xFF, help="status mask (default 0xFF)")
+    s.add_argument("--mask", type=lambda x: int(x, 0), default=0x2F,
+                   help="status mask (default 0x2F: failed now, this cycle, pending, confirmed or since clear)")
     s = sub.add_parser("freeze", help="freeze frame and extended data (occurrence, aging) of one code")
     s.add_argument("code", help="e.g. P0122")
     s = sub.add_parser("clear", help="clear one code, a group (dc_motor, throttle, comm) or all")
