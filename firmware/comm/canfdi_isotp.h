@@ -64,9 +64,9 @@
  * most one frame build (CAN_DL bytes). Measured with the application (see
  * app/canfdi_app.h for the step with a request in flight).
  * Memory: sizeof(canfdi_isotp_t) = CANFDI_CFG_ISOTP_RX_BYTES +
- * CANFDI_CFG_ISOTP_TX_BYTES + 9 x CANFDI_CFG_ISOTP_SF_QUEUE + about 110
- * bytes on a 32-bit target (default 128 + 256 + 36 + 110 = 528; the exact
- * figure is printed by `canfdi-sil --sizes` for the host).
+ * CANFDI_CFG_ISOTP_TX_BYTES + 8 x CANFDI_CFG_ISOTP_SF_QUEUE + about 116
+ * bytes: 532 on Cortex-M with the defaults (128 + 256 + 32 + 116), of
+ * which the counters are 64; `canfdi-sil --sizes` prints the host's.
  */
 #ifndef CANFDI_ISOTP_H
 #define CANFDI_ISOTP_H
