@@ -64,8 +64,8 @@
  * most one frame build (CAN_DL bytes). Measured with the application (see
  * app/canfdi_app.h for the step with a request in flight).
  * Memory: sizeof(canfdi_isotp_t) = CANFDI_CFG_ISOTP_RX_BYTES +
- * CANFDI_CFG_ISOTP_TX_BYTES + 8 x CANFDI_CFG_ISOTP_SF_QUEUE + about 116
- * bytes: 532 on Cortex-M with the defaults (128 + 256 + 32 + 116), of
+ * CANFDI_CFG_ISOTP_TX_BYTES + 9 x CANFDI_CFG_ISOTP_SF_QUEUE + about 112
+ * bytes: 532 on Cortex-M with the defaults (128 + 256 + 36 + 112), of
  * which the counters are 64; `canfdi-sil --sizes` prints the host's.
  */
 #ifndef CANFDI_ISOTP_H
