@@ -158,7 +158,7 @@ typedef struct {
   canfdi_uds_cfg_t cfg;
   canfdi_isotp_t tp;
   canfdi_uds_sec_t sec;
-  uint32_t steps;          /* stirs the seeds */
+  uint32_t steps;          /* steps since init; wraps by intent: it only stirs the seeds */
   uint16_t s3_left_ms;
   uint8_t session;
   bool tx_silent;

@@ -764,6 +764,19 @@ int main(int argc, char **argv)
         /* EcuDiagnosis: in the log only */
       }
     }
+    if (canfdi_app_reset_requested(&app)) {
+      /* ECUReset answered: the rig is the port, and a hard reset is a
+       * power cycle through the NVM (as canfdi-ecu does it) */
+      canfdi_sim_action_t reset;
+      char amsg[160];
+      memset(&reset, 0, sizeof reset);
+      reset.t_us = t_us;
+      reset.kind = (uint8_t)CANFDI_SIM_ACT_POWER_CYCLE;
+      if (apply_action(&reset, &cal, now_us, quiet, amsg, sizeof amsg) != 0) {
+        printf("FAIL  %s: ECU reset: %s\n", scn_path, amsg);
+        failures++;
+      }
+    }
     if (symptoms && ((k % 100U) == 0U)) {
       const canfdi_symptoms_t *y = &app.sym;
       fprintf(stderr, "%6.2f rn %5.2f %5.2f %5.2f %5.2f v%x | pd %6.3f %6.3f %6.3f %6.3f v%x | thr rn %5.2f %5.2f %5.2f %5.2f pd %6.3f %6.3f %6.3f %6.3f v%x f%x\n",
