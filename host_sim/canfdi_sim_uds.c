@@ -97,21 +97,21 @@ static void start(canfdi_sim_uds_tester_t *t, int64_t t_us, bool *functional, ui
   }
 }
 
-bool canfdi_sim_uds_tester_tx(canfdi_sim_uds_tester_t *t, int64_t t_us, bool *functional, uint8_t data[8])
+bool canfdi_sim_uds_tester_tx(canfdi_sim_uds_tester_t *t, int64_t t_us, bool *functional, uint8_t pdu[8])
 {
   bool out = false;
-  memset(data, PAD, 8U);
+  memset(pdu, PAD, 8U);
   *functional = false;
   if ((t->state == ST_IDLE) && (t->next < t->n) && (t->list[t->next].t_us <= t_us)) {
-    start(t, t_us, functional, data);
+    start(t, t_us, functional, pdu);
     out = true;
   } else if (t->state == ST_SEND_CF) {
     t->gap = (t->gap > 0U) ? (uint8_t)(t->gap - 1U) : 0U;
     if (t->gap == 0U) {
       const canfdi_sim_uds_t *u = &t->list[t->cur];
       const uint32_t n = ((u->req_len - t->pos) < 7U) ? (u->req_len - t->pos) : 7U;
-      data[0] = (uint8_t)(0x20U | t->sn);
-      memcpy(&data[1], &u->req[t->pos], n);
+      pdu[0] = (uint8_t)(0x20U | t->sn);
+      memcpy(&pdu[1], &u->req[t->pos], n);
       t->pos += n;
       t->sn = (uint8_t)((t->sn + 1U) & 0x0FU);
       t->gap = (t->stmin > 1U) ? t->stmin : 1U;
@@ -127,9 +127,9 @@ bool canfdi_sim_uds_tester_tx(canfdi_sim_uds_tester_t *t, int64_t t_us, bool *fu
       out = true;
     }
   } else if (t->state == ST_SEND_FC) {
-    data[0] = 0x30U;
-    data[1] = 0U;
-    data[2] = 0U;
+    pdu[0] = 0x30U;
+    pdu[1] = 0U;
+    pdu[2] = 0U;
     t->state = ST_RECV_CF;
     t->deadline_us = t_us + 1000000;
     out = true;
@@ -145,42 +145,42 @@ bool canfdi_sim_uds_tester_tx(canfdi_sim_uds_tester_t *t, int64_t t_us, bool *fu
   return out;
 }
 
-void canfdi_sim_uds_tester_rx(canfdi_sim_uds_tester_t *t, int64_t t_us, const uint8_t data[8])
+void canfdi_sim_uds_tester_rx(canfdi_sim_uds_tester_t *t, int64_t t_us, const uint8_t pdu[8])
 {
-  const unsigned type = data[0] >> 4;
+  const unsigned type = pdu[0] >> 4;
   if ((t->state == ST_WAIT_FC) && (type == 3U)) {
-    if ((data[0] & 0x0FU) == 0U) {
-      t->block = data[1];
-      t->block_limited = data[1] != 0U;
-      t->stmin = (data[2] <= 0x7FU) ? data[2] : 1U;
+    if ((pdu[0] & 0x0FU) == 0U) {
+      t->block = pdu[1];
+      t->block_limited = pdu[1] != 0U;
+      t->stmin = (pdu[2] <= 0x7FU) ? pdu[2] : 1U;
       t->gap = 1U;
       t->state = ST_SEND_CF;
-    } else if ((data[0] & 0x0FU) != 1U) {
+    } else if ((pdu[0] & 0x0FU) != 1U) {
       finish(t, false, "the ECU's flow control: overflow or invalid");
     } else {
       t->deadline_us = t_us + 1000000; /* wait */
     }
-  } else if ((t->state == ST_WAIT_RESP) && (type == 0U) && ((data[0] & 0x0FU) >= 1U) &&
-             ((data[0] & 0x0FU) <= 7U)) {
-    t->resp_len = data[0] & 0x0FU;
-    memcpy(t->resp, &data[1], t->resp_len);
+  } else if ((t->state == ST_WAIT_RESP) && (type == 0U) && ((pdu[0] & 0x0FU) >= 1U) &&
+             ((pdu[0] & 0x0FU) <= 7U)) {
+    t->resp_len = pdu[0] & 0x0FU;
+    memcpy(t->resp, &pdu[1], t->resp_len);
     judge(t);
   } else if ((t->state == ST_WAIT_RESP) && (type == 1U)) {
-    t->resp_len = ((uint32_t)(data[0] & 0x0FU) << 8) | data[1];
+    t->resp_len = ((uint32_t)(pdu[0] & 0x0FU) << 8) | pdu[1];
     if ((t->resp_len > CANFDI_SIM_UDS_RESP_MAX) || (t->resp_len < 8U)) {
       finish(t, false, "first frame of a bad length");
     } else {
-      memcpy(t->resp, &data[2], 6U);
+      memcpy(t->resp, &pdu[2], 6U);
       t->resp_got = 6U;
       t->sn = 1U;
       t->state = ST_SEND_FC;
     }
   } else if ((t->state == ST_RECV_CF) && (type == 2U)) {
-    if ((data[0] & 0x0FU) != t->sn) {
+    if ((pdu[0] & 0x0FU) != t->sn) {
       finish(t, false, "consecutive frame out of sequence");
     } else {
       const uint32_t n = ((t->resp_len - t->resp_got) < 7U) ? (t->resp_len - t->resp_got) : 7U;
-      memcpy(&t->resp[t->resp_got], &data[1], n);
+      memcpy(&t->resp[t->resp_got], &pdu[1], n);
       t->resp_got += n;
       t->sn = (uint8_t)((t->sn + 1U) & 0x0FU);
       t->deadline_us = t_us + 1000000;

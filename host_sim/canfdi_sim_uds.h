@@ -63,11 +63,12 @@ typedef struct {
 void canfdi_sim_uds_tester_init(canfdi_sim_uds_tester_t *t, const canfdi_sim_uds_t *list, size_t n);
 
 /* Step at t_us, before the ECU's: at most one frame for the ECU. Returns
- * true with data (8 bytes) and *functional set when one leaves. */
-bool canfdi_sim_uds_tester_tx(canfdi_sim_uds_tester_t *t, int64_t t_us, bool *functional, uint8_t data[8]);
+ * true with pdu (its 8 ISO-TP bytes) and *functional set when one leaves. */
+bool canfdi_sim_uds_tester_tx(canfdi_sim_uds_tester_t *t, int64_t t_us, bool *functional, uint8_t pdu[8]);
 
-/* One UdsPhysResp frame of the ECU (its 8 bytes), received at t_us. */
-void canfdi_sim_uds_tester_rx(canfdi_sim_uds_tester_t *t, int64_t t_us, const uint8_t data[8]);
+/* One UdsPhysResp frame of the ECU (its 8 ISO-TP bytes, unpacked by the
+ * codec), received at t_us. */
+void canfdi_sim_uds_tester_rx(canfdi_sim_uds_tester_t *t, int64_t t_us, const uint8_t pdu[8]);
 
 /* The end of the run: a request still open fails. */
 void canfdi_sim_uds_tester_finish(canfdi_sim_uds_tester_t *t);
