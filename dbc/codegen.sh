@@ -8,6 +8,8 @@
 #   firmware/comm/gen/canfdi_sig_conv.h      raw <-> Q16.16 conversion constants
 #   firmware/comm/gen/canfdi_msg.{h,c}       cantools codec, node ECU, integers only
 #   host_sim/gen/canfdi_sim_msg.{h,c}        cantools codec, node PLANT
+#   firmware/catalogue/canfdi_uds_ids.h      diagnostic identifiers (dbc/uds_dids.csv)
+#   tools/canfdi/uds_config.py               the udsoncan client configuration
 # Everything is generated into a temporary tree first. cantools stamps the
 # generation time into each file, so files are compared ignoring that line:
 # `gen` rewrites only files whose content really changed (no churn), `check`
@@ -26,11 +28,13 @@ FILES=(
   firmware/comm/gen/canfdi_sig_conv.h
   firmware/comm/gen/canfdi_msg.h firmware/comm/gen/canfdi_msg.c
   host_sim/gen/canfdi_sim_msg.h host_sim/gen/canfdi_sim_msg.c
+  firmware/catalogue/canfdi_uds_ids.h tools/canfdi/uds_config.py
 )
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 "$PY" dbc/gen_tables.py --root . --out "$tmp"
+"$PY" dbc/gen_uds.py --root . --out "$tmp"
 "$PY" -m cantools generate_c_source --database-name canfdi_msg --node ECU \
   --no-floating-point-numbers -o "$tmp/firmware/comm/gen" "$tmp/dbc/canfdi.dbc" >/dev/null
 "$PY" -m cantools generate_c_source --database-name canfdi_sim_msg --node PLANT \

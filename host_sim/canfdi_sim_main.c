@@ -202,6 +202,9 @@ static void summary(const canfdi_sim_scn_t *scn, const char *path)
       }
     }
   }
+  if (scn->n_uds > 0U) {
+    printf("  %zu uds request(s): sent by the SIL rig's tester only, ignored here\n", scn->n_uds);
+  }
 }
 
 /* Options of the SocketCAN mode. */

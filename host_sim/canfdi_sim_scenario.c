@@ -11,7 +11,7 @@
 #include "core/canfdi_common.h"
 #include "gen/canfdi_faults.h"
 
-#define MAX_TOKENS 12U
+#define MAX_TOKENS 100U /* a uds line of a long request and its pattern fits */
 
 /* Physical ranges of the profiled quantities (clamp of the sum) and the
  * largest magnitude one component may have (the span of the range). */
@@ -596,6 +596,105 @@ static int do_csv_profile(parser_t *ps, char **tok, size_t n)
   return rc;
 }
 
+/* One hex byte "00".."FF" (case-insensitive); false if not one. */
+static bool hex_byte(const char *s, uint8_t *v)
+{
+  unsigned x = 0U;
+  bool ok = (strlen(s) == 2U);
+  for (size_t i = 0U; ok && (i < 2U); i++) {
+    const char c = s[i];
+    const unsigned d = ((c >= '0') && (c <= '9'))   ? (unsigned)(c - '0')
+                       : ((c >= 'a') && (c <= 'f')) ? (unsigned)(c - 'a' + 10)
+                       : ((c >= 'A') && (c <= 'F')) ? (unsigned)(c - 'A' + 10)
+                                                    : 16U;
+    ok = d < 16U;
+    x = (x << 4) | (d & 0x0FU);
+  }
+  *v = (uint8_t)x;
+  return ok;
+}
+
+/* The expected response after `expect`: hex bytes, '..', a final '*', or none. */
+static int uds_pattern(parser_t *ps, char **tok, size_t n, size_t k, canfdi_sim_uds_t *u)
+{
+  int rc = CANFDI_OK;
+  u->judged = true;
+  if ((k < n) && (strcmp(tok[k], "none") == 0)) {
+    u->none = true;
+    rc = (k + 1U == n) ? CANFDI_OK : fail(ps, "nothing may follow 'expect none'");
+  } else if (k >= n) {
+    rc = fail(ps, "expect what? hex bytes, '..' (any byte), a final '*' (any rest), or none");
+  } else {
+    for (; (rc == CANFDI_OK) && (k < n); k++) {
+      uint8_t b = 0U;
+      if ((strcmp(tok[k], "*") == 0) && (k + 1U == n)) {
+        u->any_tail = true;
+      } else if (u->pat_len >= CANFDI_SIM_SCN_UDS_BYTES) {
+        rc = fail(ps, "expected response longer than %u bytes", CANFDI_SIM_SCN_UDS_BYTES);
+      } else if (strcmp(tok[k], "..") == 0) {
+        u->pat_any[u->pat_len] = 1U;
+        u->pat_len++;
+      } else if (hex_byte(tok[k], &b)) {
+        u->pat[u->pat_len] = b;
+        u->pat_len++;
+      } else {
+        rc = fail(ps, "'%s' is not a hex byte, '..' or a final '*'", tok[k]);
+      }
+    }
+  }
+  return rc;
+}
+
+/* uds <t> <phys|func> <hex byte>... [expect <pattern> | expect none] */
+static int do_uds(parser_t *ps, char **tok, size_t n)
+{
+  canfdi_sim_scn_t *scn = ps->scn;
+  canfdi_sim_uds_t *u = &scn->uds[(scn->n_uds < CANFDI_SIM_SCN_MAX_UDS) ? scn->n_uds : 0U];
+  double t = 0.0;
+  size_t k = 3U;
+  int rc = want_args(ps, n, 4U, 3U + (2U * CANFDI_SIM_SCN_UDS_BYTES) + 2U,
+                     "uds <t> <phys|func> <hex byte>... [expect <hex byte|..>... [*] | expect none]");
+  if ((rc == CANFDI_OK) && (scn->n_uds >= CANFDI_SIM_SCN_MAX_UDS)) {
+    rc = fail(ps, "too many uds lines (at most %u)", CANFDI_SIM_SCN_MAX_UDS);
+  }
+  if (rc == CANFDI_OK) {
+    memset(u, 0, sizeof *u);
+    rc = arg_num(ps, tok, 1U, "request time", 0.0, CANFDI_SIM_SCN_MAX_DURATION_S, &t);
+  }
+  if ((rc == CANFDI_OK) && (strcmp(tok[2], "phys") != 0) && (strcmp(tok[2], "func") != 0)) {
+    rc = fail(ps, "addressing '%s': phys (0x7E0) or func (0x7DF)", tok[2]);
+  }
+  for (; (rc == CANFDI_OK) && (k < n) && (strcmp(tok[k], "expect") != 0); k++) {
+    if (u->req_len >= CANFDI_SIM_SCN_UDS_BYTES) {
+      rc = fail(ps, "request longer than %u bytes", CANFDI_SIM_SCN_UDS_BYTES);
+    } else if (!hex_byte(tok[k], &u->req[u->req_len])) {
+      rc = fail(ps, "'%s' is not a hex byte (two digits, e.g. 19 or 0A)", tok[k]);
+    } else {
+      u->req_len++;
+    }
+  }
+  if ((rc == CANFDI_OK) && (u->req_len == 0U)) {
+    rc = fail(ps, "uds: no request bytes");
+  }
+  u->functional = (rc == CANFDI_OK) && (strcmp(tok[2], "func") == 0);
+  if ((rc == CANFDI_OK) && u->functional && (u->req_len > 7U)) {
+    rc = fail(ps, "a functional request is one single frame: at most 7 bytes");
+  }
+  if ((rc == CANFDI_OK) && (k < n)) {
+    rc = uds_pattern(ps, tok, n, k + 1U, u);
+  }
+  if (rc == CANFDI_OK) {
+    u->t_us = (int64_t)llround(t * 1e6);
+    u->line = ps->line;
+    if ((scn->n_uds > 0U) && (u->t_us < scn->uds[scn->n_uds - 1U].t_us)) {
+      rc = fail(ps, "uds at %g s is before the previous uds line (write them in time order)", t);
+    } else {
+      scn->n_uds++;
+    }
+  }
+  return rc;
+}
+
 static int do_line(parser_t *ps, char *line)
 {
   canfdi_sim_scn_t *scn = ps->scn;
@@ -750,9 +849,11 @@ static int do_line(parser_t *ps, char *line)
     rc = do_action(ps, tok, n, (uint8_t)CANFDI_SIM_ACT_POWER_CYCLE);
   } else if (strcmp(d, "profile") == 0) {
     rc = do_csv_profile(ps, tok, n);
+  } else if (strcmp(d, "uds") == 0) {
+    rc = do_uds(ps, tok, n);
   } else {
     rc = fail(ps, "unknown directive '%s' (duration, seed, noise, init, param, speed, angle, "
-                  "load, profile, fault, expect, cycle, clear, power_cycle)", d);
+                  "load, profile, fault, expect, cycle, clear, power_cycle, uds)", d);
   }
   return rc;
 }
@@ -773,6 +874,7 @@ static void scn_defaults(canfdi_sim_scn_t *scn)
   scn->n_faults = 0U;
   scn->n_expects = 0U;
   scn->n_actions = 0U;
+  scn->n_uds = 0U;
 }
 
 static void parser_init(parser_t *ps, canfdi_sim_scn_t *scn, const char *name,
@@ -837,6 +939,12 @@ static int finish(parser_t *ps)
     if ((double)scn->actions[i].t_us * 1e-6 >= scn->duration_s) {
       ps->line = scn->actions[i].line;
       rc = fail(ps, "action at or after the end of the scenario (duration %g s)", scn->duration_s);
+    }
+  }
+  for (i = 0U; (rc == CANFDI_OK) && (i < scn->n_uds); i++) {
+    if ((double)scn->uds[i].t_us * 1e-6 >= scn->duration_s) {
+      ps->line = scn->uds[i].line;
+      rc = fail(ps, "uds request at or after the end of the scenario (duration %g s)", scn->duration_s);
     }
   }
   for (i = 0U; (rc == CANFDI_OK) && (i < scn->n_expects); i++) {

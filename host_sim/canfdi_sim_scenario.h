@@ -22,6 +22,9 @@
  *   cycle <t>                                 ECU: operation cycle ends, a new one starts
  *   clear <t> [<code>|all]                    ECU: ClearDiagnosticInformation
  *   power_cycle <t>                           ECU: DTC memory -> NVM, re-init, load
+ *   uds <t> <phys|func> <hex byte>... [expect <hex byte|..>... [*] | expect none]
+ *                                             a tester's UDS request and the
+ *                                             response it expects (SIL rig)
  *   expect <t> dtc <code> [pending|confirmed] | no_dtc |
  *          degradation <dcm|thr> <normal|degraded|fail_safe> |
  *          dtc_status <code> <bits> | occurrence <code> <n> |
@@ -63,6 +66,8 @@
 #define CANFDI_SIM_SCN_LINE_MAX 256U
 #define CANFDI_SIM_SCN_MAX_EXPECT 64U
 #define CANFDI_SIM_SCN_MAX_ACTIONS 64U
+#define CANFDI_SIM_SCN_MAX_UDS 64U
+#define CANFDI_SIM_SCN_UDS_BYTES 64U
 #define CANFDI_SIM_SCN_MAX_DURATION_S 1e5
 
 #define CANFDI_SIM_INIT_DCM_SPEED 0U
@@ -116,6 +121,22 @@ typedef struct {
   unsigned line;
 } canfdi_sim_action_t;
 
+/* A tester's UDS request (SIL rig only): sent at t_us (after the previous
+ * one's response), its response judged against the pattern. */
+typedef struct {
+  int64_t t_us;
+  bool functional;  /* UdsFuncReq 0x7DF (single frame), else UdsPhysReq 0x7E0 */
+  bool judged;      /* an `expect` part was given */
+  bool none;        /* expect none: no response at all */
+  bool any_tail;    /* the pattern ends with '*': any further bytes */
+  uint8_t req_len;
+  uint8_t pat_len;
+  uint8_t req[CANFDI_SIM_SCN_UDS_BYTES];
+  uint8_t pat[CANFDI_SIM_SCN_UDS_BYTES];
+  uint8_t pat_any[CANFDI_SIM_SCN_UDS_BYTES]; /* 1: '..', any byte */
+  unsigned line;
+} canfdi_sim_uds_t;
+
 typedef struct {
   double duration_s;
   canfdi_sim_cfg_t cfg;            /* plant parameters, noise, seed */
@@ -133,6 +154,8 @@ typedef struct {
   bool has_profile;                /* a `profile` line was given */
   unsigned profile_line;
   canfdi_sim_csvprof_t profile;    /* its file (path resolved against the scenario's folder) */
+  canfdi_sim_uds_t uds[CANFDI_SIM_SCN_MAX_UDS]; /* non-decreasing t_us */
+  size_t n_uds;
 } canfdi_sim_scn_t;
 
 /* Name of a CANFDI_SIM_FF_* signal; "?" if out of range. */

@@ -32,10 +32,13 @@ pil_den = $(word 5,$(PIL_$(1)))
 # The scenarios of `make pil-test`: short ones that cover a DC-motor model
 # fault (estimators and parity equations to a DTC), a throttle sensor fault
 # (vote, limp-home), a communication fault (CRC) and a parameter change
-# found by the estimator; bench-pil adds the demo (the step-cost reference
+# found by the estimator, and a workshop session of UDS requests (the step's
+# cost with a diagnostic request or response in flight is reported on its
+# own line); bench-pil adds the demo (the step-cost reference
 # of firmware/app/canfdi_app.h).
 PIL_SCN := tests/sil/scenarios/dcm_ia_offset.scn tests/sil/scenarios/tps1_short.scn \
-           tests/sil/scenarios/thr_crc.scn tests/sil/scenarios/dcm_friction_up.scn
+           tests/sil/scenarios/thr_crc.scn tests/sil/scenarios/dcm_friction_up.scn \
+           tests/sil/scenarios/uds_workshop.scn
 PIL_BENCH_SCN := $(PIL_SCN) tests/sil/scenarios/demo.scn
 
 # mk/sil.mk and mk/target.mk are read after this file: the SIL runner and

@@ -5,6 +5,8 @@
 #include "app/canfdi_app.h"
 
 #include "app/canfdi_app_sym.h"
+#include "app/canfdi_app_uds.h"
+#include "comm/gen/canfdi_msg.h"
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
 
@@ -18,7 +20,12 @@ int32_t canfdi_app_rx_frame(canfdi_app_t *app, uint32_t id, const uint8_t *data,
 {
   int32_t rc = -CANFDI_EINVAL;
   if ((app != NULL) && app->initialised) {
-    rc = (int32_t)canfdi_rx_frame(&app->rx, id, data, dlc, now_us);
+    if ((id == CANFDI_MSG_UDS_PHYS_REQ_FRAME_ID) || (id == CANFDI_MSG_UDS_FUNC_REQ_FRAME_ID)) {
+      /* the diagnostic server's connection, not a supervised input */
+      rc = canfdi_uds_rx_can(&app->uds, id == CANFDI_MSG_UDS_FUNC_REQ_FRAME_ID, data, dlc);
+    } else {
+      rc = (int32_t)canfdi_rx_frame(&app->rx, id, data, dlc, now_us);
+    }
   }
   return rc;
 }
@@ -36,6 +43,8 @@ void canfdi_app_port_timing(canfdi_app_t *app, uint32_t step_us, uint32_t cycle_
     canfdi_app_out_port_timing(&app->out, step_us, cycle_us);
   }
 }
+
+bool canfdi_app_reset_requested(const canfdi_app_t *app) { return (app != NULL) && app->reset_requested; }
 
 const canfdi_dtc_t *canfdi_app_dtc(const canfdi_app_t *app) { return (app != NULL) ? &app->dtc : NULL; }
 
@@ -165,7 +174,8 @@ static void stage_control(canfdi_app_t *app, int32_t *u_dcm, int32_t *u_thr)
   ex_thr = canfdi_excite_step_q16(&app->excite_thr);
   const uint8_t dmode = (m->dcm_ctrl_mode == CANFDI_CTRL_OFF) ? (uint8_t)CANFDI_CTRL_OFF : (uint8_t)CANFDI_CTRL_RUN;
   const uint8_t tmode = (m->thr_ctrl_mode == CANFDI_CTRL_OFF) ? (uint8_t)CANFDI_CTRL_OFF : (uint8_t)CANFDI_CTRL_RUN;
-  din.speed_ref_rad_s_q16 = IN_USABLE(app, CANFDI_RX_IN_SP_DCM_SPEED) ? IN_VAL(app, CANFDI_RX_IN_SP_DCM_SPEED) : 0;
+  din.speed_ref_rad_s_q16 = app->uds_act.speed_override ? app->uds_act.speed_ref_rad_s_q16
+                            : (IN_USABLE(app, CANFDI_RX_IN_SP_DCM_SPEED) ? IN_VAL(app, CANFDI_RX_IN_SP_DCM_SPEED) : 0);
   din.excite_rad_s_q16 = ex_dcm;
   din.speed_rad_s_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_OMEGA);
   din.ia_A_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_IA);
@@ -178,8 +188,9 @@ static void stage_control(canfdi_app_t *app, int32_t *u_dcm, int32_t *u_thr)
                  ? dmode
                  : (uint8_t)CANFDI_CTRL_OFF;
   *u_dcm = canfdi_ctrl_dcm_step(&app->ctrl_dcm, &din, NULL);
-  tin.angle_ref_rad_q16 = IN_USABLE(app, CANFDI_RX_IN_SP_THR_ANGLE) ? IN_VAL(app, CANFDI_RX_IN_SP_THR_ANGLE)
-                                                                   : app->cal.ctrl_thr.limp_home_rad_q16;
+  tin.angle_ref_rad_q16 = app->uds_act.angle_override ? app->uds_act.angle_ref_rad_q16
+                          : (IN_USABLE(app, CANFDI_RX_IN_SP_THR_ANGLE) ? IN_VAL(app, CANFDI_RX_IN_SP_THR_ANGLE)
+                                                                       : app->cal.ctrl_thr.limp_home_rad_q16);
   tin.excite_rad_q16 = ex_thr;
   tin.angle_rad_q16 = app->vote_out.angle_rad_q16;
   tin.supply_V_q16 = IN_VAL(app, CANFDI_RX_IN_THR_USUPPLY);
@@ -340,7 +351,7 @@ static void stage_manage(canfdi_app_t *app, int32_t u_dcm, int32_t u_thr)
   mi.faults = canfdi_dtcroute_manager_faults(&app->dtcroute, &app->dtc, app->report);
   mi.fail_silent = false;
   mi.dcm_hold_off = !app->dcm.started;
-  mi.thr_hold_off = !app->thr.started;
+  mi.thr_hold_off = !app->thr.started || app->uds_act.thr_release; /* the spring check releases */
   mi.now_ms = canfdi_uptime_ms(&app->uptime);
   (void)canfdi_actmgr_step(&app->actmgr, &mi, &app->vote_out, &app->fb.mgr);
   app->fb.faults = mi.faults;
@@ -428,6 +439,7 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     /* 1. input supervision; the nominal load stands in for a missing load */
     (void)canfdi_rx_set_estimate(&app->rx, CANFDI_RX_IN_SP_DCM_LOAD, app->cal.load_nom_Nm_q16);
     (void)canfdi_rx_step(&app->rx, now_us);
+    canfdi_app_uds_apply(app);         /* the tester's estimator resets */
     stage_vote(app);                   /* 2. */
     stage_control(app, &u_dcm, &u_thr); /* 3. */
     stage_detect(app);                 /* 4. */
@@ -435,6 +447,7 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     stage_manage(app, u_dcm, u_thr);   /* 8. */
     update_feedback(app);
     rc = stage_outputs(app, out);      /* 9. */
+    rc = canfdi_app_uds_stage(app, out, rc); /* 10. the diagnostic server */
     canfdi_count_inc(&app->diag.steps);
     app->applied_set = false; /* set_applied acts on one step */
     app->running = true;

@@ -12,7 +12,8 @@
  *                 new operation cycle; canfdi_app_init is the same without
  *                 an image
  *   frames in     canfdi_app_rx_frame() for every received CAN frame (any
- *                 id; the input supervision judges it)
+ *                 id; the input supervision judges it, except UdsPhysReq
+ *                 0x7E0 and UdsFuncReq 0x7DF: the diagnostic server's)
  *   1 ms step     canfdi_app_step() writes the frames to send in this step
  *                 into the caller's buffer (CANFDI_APP_MAX_TX frames)
  *   NVM           canfdi_app_nvm_image() for a periodic store while
@@ -50,6 +51,12 @@
  *                         10 ms, status / diagnosis / self-diagnostics /
  *                         DTC / parameters 100 ms, DTC status changes on
  *                         change
+ *  10. diagnostic server  canfdi_app_uds (uds/canfdi_uds.h): a tester's
+ *                         request answered from this step's values, at
+ *                         most one ISO-TP frame (UdsPhysResp 0x7E8); its
+ *                         decisions (actuator test references, spring
+ *                         check release, estimator resets, monitoring
+ *                         frames off, ECU reset) act in the next step
  * Feedback (canfdi_app_fb_t): what the last step decided and this step
  * obeys. The models use the commands the manager applied over the interval
  * that ends with this step's samples; the observer's angle is not offered
@@ -95,9 +102,13 @@
  * with margin; on a Cortex-M0 at 48 MHz it does not fit. Host (x86-64,
  * gcc -O2, callgrind): `make sil-bench`. The same run shows the ECU's
  * frames bit-identical between the host build and both target builds.
+ * With a tester's requests in flight (`make pil-test`, the SIL log of
+ * tests/sil/scenarios/uds_workshop.scn): at most 39 938 (M4) / 84 096 (M0)
+ * in those steps, within the same run's maxima (42 083 / 86 851).
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host)
  * and is the .bss of `make firmware` on the targets; all of the
- * application's RAM, static. No heap.
+ * application's RAM, static: 10 848 bytes on Cortex-M, 740 of them the
+ * diagnostic server (uds/canfdi_uds.h). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H
@@ -124,8 +135,19 @@
 #include "model/canfdi_est_thr.h"
 #include "model/canfdi_parity_dcm.h"
 #include "model/canfdi_parity_thr.h"
+#include "uds/canfdi_uds.h"
 
-#define CANFDI_APP_MAX_TX CANFDI_TX_MAX_FRAMES_PER_STEP
+/* The scheduled frames and one ISO-TP frame of the diagnostic server: a
+ * step that sends two actuators, a slow frame and a DTC event may also
+ * answer a tester, so the bound grows by that one frame. */
+#define CANFDI_APP_MAX_TX (CANFDI_TX_MAX_FRAMES_PER_STEP + 1U)
+
+/* The NVM image: a 4-byte header (CANFDI_APP_IMAGE_TAG, version, the
+ * security attempt counter, 0) before the DTC memory's image. */
+#define CANFDI_APP_IMAGE_TAG 0xA5U
+#define CANFDI_APP_IMAGE_VERSION 1U
+#define CANFDI_APP_IMAGE_HEADER_BYTES 4U
+#define CANFDI_APP_IMAGE_MAX_BYTES (CANFDI_APP_IMAGE_HEADER_BYTES + CANFDI_DTC_IMAGE_MAX_BYTES)
 
 /* canfdi_app_power_up: the NVM image was rejected; the memory starts cleared. */
 #define CANFDI_APP_IMAGE_REJECTED 1
@@ -197,6 +219,8 @@ typedef struct {
   canfdi_dtc_t dtc;
   canfdi_dtcroute_t dtcroute;
   canfdi_app_out_t out;
+  canfdi_uds_t uds;
+  canfdi_uds_act_t uds_act; /* the server's decisions of the last step, for this one */
   canfdi_uptime_t uptime;
   /* results of this step's stages */
   canfdi_vote_out_t vote_out;
@@ -210,6 +234,7 @@ typedef struct {
   bool applied_set;     /* canfdi_app_set_applied was called since the last step */
   canfdi_app_diag_t diag;
   bool running;         /* a step has run since power-up */
+  bool reset_requested; /* ECUReset answered: the port powers down and up */
   bool initialised;
 } canfdi_app_t;
 
@@ -222,9 +247,10 @@ typedef struct {
 int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us);
 
 /*
- * Cold start: canfdi_app_init, then the DTC memory from image[0..len-1]
- * (a canfdi_dtc_serialize image, e.g. read back from NVM; none when len is
- * 0 or image NULL) and a new operation cycle. Returns CANFDI_OK,
+ * Cold start: canfdi_app_init, then the DTC memory and the SecurityAccess
+ * attempt counter from image[0..len-1] (a canfdi_app_power_down image, or
+ * a bare canfdi_dtc_serialize image of version 1 or 2 stored by an earlier
+ * firmware; none when len is 0 or image NULL) and a new operation cycle. Returns CANFDI_OK,
  * CANFDI_APP_IMAGE_REJECTED (the image was not usable; the memory starts
  * cleared and the app runs) or -CANFDI_EINVAL (calibration refused).
  */
@@ -233,9 +259,10 @@ int32_t canfdi_app_power_up(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint
 
 /*
  * Power-down (ignition off, shutdown): ends the operation cycle and writes
- * the DTC memory's image into image[0..cap-1] for the port to store.
- * Returns its length (> 0), -CANFDI_ERANGE (cap too small:
- * CANFDI_DTC_IMAGE_MAX_BYTES always suffices) or -CANFDI_EINVAL. The app
+ * the NVM image (the header above, then the DTC memory's image) into
+ * image[0..cap-1] for the port to store. Returns its length (> 0),
+ * -CANFDI_ERANGE (cap too small: CANFDI_APP_IMAGE_MAX_BYTES always
+ * suffices) or -CANFDI_EINVAL. The app
  * must be powered up again before the next step.
  */
 int32_t canfdi_app_power_down(canfdi_app_t *app, uint8_t *image, uint32_t cap);
@@ -310,6 +337,12 @@ void canfdi_app_deadline_miss(canfdi_app_t *app);
  * speed. No-op on NULL. Cost O(1).
  */
 void canfdi_app_port_timing(canfdi_app_t *app, uint32_t step_us, uint32_t cycle_us);
+
+/* An ECUReset was answered (its response has left with the frames of the
+ * step that set this): the port stores the image of canfdi_app_power_down
+ * and powers the application up again from it, as after a power cycle.
+ * False for NULL. */
+bool canfdi_app_reset_requested(const canfdi_app_t *app);
 
 /* The trouble-code memory, read-only (NULL for NULL). */
 const canfdi_dtc_t *canfdi_app_dtc(const canfdi_app_t *app);

@@ -101,6 +101,8 @@ void canfdi_app_default_cal(canfdi_app_cal_t *cal)
     cal->rx.first_timeout_us = 2000000U;
     canfdi_ctrl_dcm_cal_default(&cal->ctrl_dcm);
     canfdi_ctrl_thr_cal_default(&cal->ctrl_thr);
+    canfdi_uds_default_cfg(&cal->uds);
+    cal->uds.limp_home_rad_q16 = cal->ctrl_thr.limp_home_rad_q16;
     cal_excitation(cal);
     cal_models(cal);
     cal_position_sensors(cal);

@@ -33,6 +33,7 @@
 #include "model/canfdi_parity_dcm.h"
 #include "model/canfdi_parity_thr.h"
 #include "model/canfdi_tps.h"
+#include "uds/canfdi_uds.h"
 
 typedef struct {
   canfdi_tps_cal_t tps1;           /* throttle-position sensor characteristics: */
@@ -58,6 +59,7 @@ typedef struct {
   canfdi_actmgr_cfg_t actmgr;
   canfdi_diagnosis_cfg_t diagnosis;
   canfdi_dtcroute_cfg_t dtcroute;
+  canfdi_uds_cfg_t uds;            /* the diagnostic server (limp-home angle from ctrl_thr) */
   int32_t load_nom_Nm_q16;         /* load the models assume while the vehicle's
                                     * load feed-forward (SetpointDcm.SpDcmLoad) is
                                     * lost, rejected or not yet received */

@@ -2,7 +2,11 @@
  * canfdi_app_power.c — the application's power and operation-cycle
  * sequence (see canfdi_app.h): cold start with or without a stored DTC
  * image, power-down with the image to store, a new operation cycle, a
- * tester's clear. The Linux port (port/linux/canfdi_ecu_nvm.c) and the SIL
+ * tester's clear, and the NVM image: a 4-byte header (CANFDI_APP_IMAGE_TAG,
+ * CANFDI_APP_IMAGE_VERSION, the SecurityAccess attempt counter, 0) before
+ * the DTC memory's image. An image that starts with a DTC image version
+ * (1 or 2: stored by a firmware without the header) is the DTC memory
+ * alone and loads with no failed attempts. The Linux port (port/linux/canfdi_ecu_nvm.c) and the SIL
  * rig (tests/sil/canfdi_sil.c) both go through these functions, so a
  * power cycle is the same sequence everywhere.
  */
@@ -31,6 +35,7 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
       (canfdi_diagnosis_init(&app->diagnosis, &c->diagnosis) != CANFDI_OK) ||
       (canfdi_dtc_init(&app->dtc, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT) != CANFDI_OK) ||
       (canfdi_dtcroute_init(&app->dtcroute, &c->dtcroute, &app->dtc) != CANFDI_OK) ||
+      (canfdi_uds_init(&app->uds, &c->uds, 0U, now_us) != CANFDI_OK) ||
       (canfdi_dtc_cycle_start(&app->dtc) != CANFDI_OK)) {
     rc = -CANFDI_EINVAL;
   }
@@ -67,7 +72,9 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
       app->applied = (canfdi_app_applied_t){0};
       app->applied_set = false;
       app->diag = (canfdi_app_diag_t){0};
+      app->uds_act = (canfdi_uds_act_t){0};
       app->running = false;
+      app->reset_requested = false;
       app->initialised = true;
     }
   }
@@ -79,12 +86,41 @@ int32_t canfdi_app_power_up(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint
 {
   int32_t rc = canfdi_app_init(app, cal, now_us);
   if ((rc == CANFDI_OK) && (image != NULL) && (len > 0U)) {
+    const bool framed = image[0] == (uint8_t)CANFDI_APP_IMAGE_TAG;
+    const bool header_ok = (len > CANFDI_APP_IMAGE_HEADER_BYTES) && (image[1] == (uint8_t)CANFDI_APP_IMAGE_VERSION) &&
+                           (image[3] == 0U);
     /* the fresh memory's cycle had no report: ending it changes nothing */
     (void)canfdi_dtc_cycle_end(&app->dtc);
-    if (canfdi_dtc_deserialize(&app->dtc, image, len) != CANFDI_OK) {
+    if (framed && !header_ok) {
       rc = CANFDI_APP_IMAGE_REJECTED;
+    } else if (canfdi_dtc_deserialize(&app->dtc, framed ? &image[CANFDI_APP_IMAGE_HEADER_BYTES] : image,
+                                      framed ? (len - CANFDI_APP_IMAGE_HEADER_BYTES) : len) != CANFDI_OK) {
+      rc = CANFDI_APP_IMAGE_REJECTED;
+    } else {
+      /* the memory loaded */
+    }
+    if (framed && header_ok) {
+      /* the attempt counter survives even a rejected DTC image */
+      (void)canfdi_uds_init(&app->uds, &app->cal.uds, image[2], now_us);
     }
     (void)canfdi_dtc_cycle_start(&app->dtc);
+  }
+  return rc;
+}
+
+/* The header, then the DTC memory's image. */
+static int32_t write_image(const canfdi_app_t *app, uint8_t *image, uint32_t cap)
+{
+  int32_t rc = -CANFDI_ERANGE;
+  if (cap > CANFDI_APP_IMAGE_HEADER_BYTES) {
+    rc = canfdi_dtc_serialize(&app->dtc, &image[CANFDI_APP_IMAGE_HEADER_BYTES], cap - CANFDI_APP_IMAGE_HEADER_BYTES);
+    if (rc >= 0) {
+      image[0] = (uint8_t)CANFDI_APP_IMAGE_TAG;
+      image[1] = (uint8_t)CANFDI_APP_IMAGE_VERSION;
+      image[2] = canfdi_uds_sec_attempts(&app->uds);
+      image[3] = 0U;
+      rc += (int32_t)CANFDI_APP_IMAGE_HEADER_BYTES;
+    }
   }
   return rc;
 }
@@ -94,18 +130,20 @@ int32_t canfdi_app_power_down(canfdi_app_t *app, uint8_t *image, uint32_t cap)
   int32_t rc = -CANFDI_EINVAL;
   if ((app != NULL) && app->initialised && (image != NULL)) {
     (void)canfdi_dtc_cycle_end(&app->dtc);
-    rc = canfdi_dtc_serialize(&app->dtc, image, cap);
+    rc = write_image(app, image, cap);
   }
   return rc;
 }
 
 int32_t canfdi_app_nvm_image(const canfdi_app_t *app, uint8_t *image, uint32_t cap)
 {
-  return ((app != NULL) && app->initialised) ? canfdi_dtc_serialize(&app->dtc, image, cap)
-                                             : -CANFDI_EINVAL;
+  return ((app != NULL) && app->initialised && (image != NULL)) ? write_image(app, image, cap) : -CANFDI_EINVAL;
 }
 
-uint32_t canfdi_app_nvm_changes(const canfdi_app_t *app) { return (app != NULL) ? app->dtc.changes : 0U; }
+uint32_t canfdi_app_nvm_changes(const canfdi_app_t *app)
+{
+  return (app != NULL) ? (app->dtc.changes + canfdi_uds_nvm_changes(&app->uds)) : 0U;
+}
 
 int32_t canfdi_app_new_cycle(canfdi_app_t *app)
 {

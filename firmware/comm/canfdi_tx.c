@@ -438,6 +438,24 @@ int canfdi_tx_encode_prm_thr(canfdi_tx_t *tx, const canfdi_tx_param_thr_t *v,
   return ret;
 }
 
+int canfdi_tx_encode_uds_resp(canfdi_tx_t *tx, const uint8_t *isotp, canfdi_tx_frame_t *out)
+{
+  int ret = -CANFDI_EINVAL;
+  if (args_ok(tx, isotp, out)) {
+    struct canfdi_msg_uds_phys_resp_t m;
+    uint64_t v = 0U;
+    for (uint32_t i = 0U; i < CANFDI_CFG_ISOTP_FRAME_BYTES; i++) {
+      v = (v << 8) | (uint64_t)isotp[i];
+    }
+    m.uds_phys_resp_data = v;
+    frame_head(out, CANFDI_MSG_UDS_PHYS_RESP_FRAME_ID,
+               canfdi_msg_uds_phys_resp_pack(out->data, &m, 8U));
+    canfdi_count_inc(&tx->diag.uds_frames);
+    ret = CANFDI_OK;
+  }
+  return ret;
+}
+
 int canfdi_tx_dtc_event(canfdi_tx_t *tx, const canfdi_tx_dtc_t *rec)
 {
   int ret = -CANFDI_EINVAL;

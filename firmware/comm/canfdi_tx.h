@@ -75,6 +75,7 @@
 #define CANFDI_TX_H
 
 #include "comm/canfdi_e2e.h"
+#include "comm/canfdi_isotp.h"
 #include "core/canfdi_common.h"
 
 /* Depth of the on-change DTC queue; RAM: 8 bytes per entry. */
@@ -218,6 +219,7 @@ typedef struct {
   uint32_t saturations;               /* values limited to their DBC range */
   uint32_t invalid_enums;             /* unknown bridge selections sent as none */
   uint32_t bad_args;                  /* calls rejected with -CANFDI_EINVAL */
+  uint32_t uds_frames;                /* UdsPhysResp frames encoded */
 } canfdi_tx_diag_t;
 
 /* Instance, caller-owned (static). Read diag directly. */
@@ -281,5 +283,15 @@ int canfdi_tx_encode_prm_dcm(canfdi_tx_t *tx, const canfdi_tx_param_dcm_t *v,
                              canfdi_tx_frame_t *out);
 int canfdi_tx_encode_prm_thr(canfdi_tx_t *tx, const canfdi_tx_param_thr_t *v,
                              canfdi_tx_frame_t *out);
+
+/*
+ * UdsPhysResp (0x7E8): one ISO-TP frame of the diagnostic server
+ * (comm/canfdi_isotp.h), its CANFDI_CFG_ISOTP_FRAME_BYTES bytes in bus
+ * order, packed by the generated codec. Not part of the schedule: the
+ * application adds it to a step's frames when the server has one (at most
+ * one per step). CANFDI_OK or -CANFDI_EINVAL (NULL argument, tx not
+ * initialised).
+ */
+int canfdi_tx_encode_uds_resp(canfdi_tx_t *tx, const uint8_t *isotp, canfdi_tx_frame_t *out);
 
 #endif /* CANFDI_TX_H */

@@ -558,7 +558,9 @@ static void rls_phi_block(const canfdi_rls_t *r, const int32_t phi_q16[], int32_
   *ex = (top == INT32_MIN) ? 0 : (top - 30);
   for (i = 0U; i < n; i++) {
     const int32_t l = -16 - (int32_t)r->cfg.phi_shift[i] - *ex; /* left shift */
-    if (l >= 0) {
+    if (phi_q16[i] == 0) {
+      x[i] = 0; /* its shift may exceed 31 (only a nonzero regressor bounds it) */
+    } else if (l >= 0) {
       const uint32_t m = mag32(phi_q16[i]) << (unsigned)l; /* < 2^30 by choice of ex */
       x[i] = (phi_q16[i] < 0) ? -(int32_t)m : (int32_t)m;
     } else {

@@ -11,8 +11,8 @@ chain from main in the call graph the compiler wrote (-fcallgraph-info=su:
 one frame size per function, static or dynamic), plus LIBGCC_FRAME bytes for
 a libgcc helper at the end of a chain (their frames are not in the graph: the
 integer helpers push at most a few registers). Fails (exit 1) when the graph
-has recursion, a dynamic or unbounded frame, an indirect call, or when the
-worst case does not fit the stack the linker script reserves
+has recursion, a dynamic or unbounded frame, an indirect call whose targets
+it cannot name (INDIRECT below), or when the worst case does not fit the stack the linker script reserves
 (__stack_size__), and when static data plus that stack do not fit the RAM.
 
 Usage: footprint.py --machine NAME --elf ELF --map MAP --ci-dir DIR --ld LD
@@ -101,6 +101,38 @@ def parse_ci(ci_dir):
     return nodes, edges
 
 
+# The firmware's indirect calls and where their possible targets are read
+# from, so the worst case covers every one of them: caller -> (source file,
+# regex whose group 1 is a target's name). An indirect call of any other
+# function fails the report.
+INDIRECT = {
+    # the service table: the handler is the last field of each row
+    "canfdi_uds_step": ("firmware/uds/canfdi_uds.c", r"\{CANFDI_UDS_SID_\w+,[^{}]*,\s*(svc_\w+)\}"),
+    # the seed/key function: the default (a replaced key_fn is the
+    # integrator's, and its frame is theirs to add)
+    "canfdi_uds_sec_request": ("firmware/uds/canfdi_uds_sec.c", r"\b(canfdi_uds_sec_key_default)\b"),
+}
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def resolve_indirect(nodes, edges):
+    """Replace the INDIRECT callers' __indirect_call edges by edges to their
+    targets (node titles are "name" or "file.c:name" for static functions)."""
+    by_name = {}
+    for title in nodes:
+        by_name.setdefault(title.split(":")[-1], []).append(title)
+    for caller, (src, pattern) in INDIRECT.items():
+        for title in by_name.get(caller, []):
+            if "__indirect_call" not in edges.get(title, ()):
+                continue
+            with open(os.path.join(ROOT, src)) as f:
+                names = set(re.findall(pattern, f.read()))
+            targets = [t for n in sorted(names) for t in by_name.get(n, [])]
+            if targets:
+                edges[title].discard("__indirect_call")
+                edges[title].update(targets)
+
+
 def worst_stack(nodes, edges, root):
     problems = []
     memo = {}
@@ -120,7 +152,7 @@ def worst_stack(nodes, edges, root):
             problems.append("recursion through %s" % n)
             return 0, [n]
         if n == "__indirect_call":
-            problems.append("indirect call")
+            problems.append("indirect call of a function that INDIRECT does not resolve")
         own, _ = frame(n)
         best, path = 0, []
         for t in sorted(edges.get(n, ())):
@@ -152,6 +184,7 @@ def main():
     a = ap.parse_args()
     mods = parse_map(a.map)
     nodes, edges = parse_ci(a.ci_dir)
+    resolve_indirect(nodes, edges)
     depth, path, problems = worst_stack(nodes, edges, "main")
     reserved = stack_size_of(a.ld)
     flash = sum(d["flash"] for d in mods.values())

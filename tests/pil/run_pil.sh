@@ -51,6 +51,12 @@ for scn in "$@"; do
     if [ "$rc" -eq 0 ] && [ "$diff" -eq 0 ] && [ "$cmp" -eq "$steps" ]; then
       printf 'pil: pass %-18s %-3s %-10s steps %6d  instructions per step min %6d mean %6d max %6d (step %d)\n' \
         "$name" "$mname" "$mcore" "$steps" "$mn" "$mean" "$mx" "$mxs"
+      udsline=$(grep '^pil: uds_steps' <<<"$out" | tail -1)
+      if [ -n "$udsline" ]; then
+        read -r _ _ us _ umx _ umxs <<<"$udsline"
+        printf 'pil:      %-18s %-3s %-10s steps with a UDS request or response in flight %d: max %d (step %d)\n' \
+          "$name" "$mname" "$mcore" "$us" "$umx" "$umxs"
+      fi
       passed=$((passed + 1))
     else
       echo "pil: FAIL $name on $mname ($mcore): $diff of $cmp steps differ from the host build (first: step $first), rc $rc"

@@ -47,6 +47,7 @@
 #include "canfdi_sim_frames.h"
 #include "canfdi_sim_rig.h"
 #include "canfdi_sim_scenario.h"
+#include "canfdi_sim_uds.h"
 #include "canfdi_sim_trace.h"
 #include "core/canfdi_common.h"
 #include "gen/canfdi_faults.h"
@@ -296,6 +297,47 @@ static canfdi_app_t app;  /* the firmware's whole state, as on a target */
 static canfdi_sim_scn_t scn;
 static canfdi_sim_t sim;
 static canfdi_sim_rig_t rig; /* the plant/vehicle side of a step (shared with HIL) */
+static canfdi_sim_uds_tester_t tester; /* the scenario's `uds` lines */
+
+/* The tester's frame of this step, if any, packed by the codec and handed
+ * to the ECU (the ECU's socket passes 0x7E0 and 0x7DF). */
+static void tester_send(FILE *log, const char *channel, int64_t t_us)
+{
+  bool functional = false;
+  uint8_t b[8];
+  if (canfdi_sim_uds_tester_tx(&tester, t_us, &functional, b)) {
+    uint8_t data[8];
+    uint64_t v = 0U;
+    uint32_t id;
+    for (unsigned i = 0U; i < 8U; i++) {
+      v = (v << 8) | b[i];
+    }
+    if (functional) {
+      struct canfdi_sil_msg_uds_func_req_t m = {v};
+      (void)canfdi_sil_msg_uds_func_req_pack(data, &m, sizeof data);
+      id = CANFDI_SIL_MSG_UDS_FUNC_REQ_FRAME_ID;
+    } else {
+      struct canfdi_sil_msg_uds_phys_req_t m = {v};
+      (void)canfdi_sil_msg_uds_phys_req_pack(data, &m, sizeof data);
+      id = CANFDI_SIL_MSG_UDS_PHYS_REQ_FRAME_ID;
+    }
+    (void)canfdi_app_rx_frame(&app, id, data, 8U, (uint32_t)t_us);
+    log_frame(log, channel, t_us, id, data, 8U);
+  }
+}
+
+/* An ECU frame for the tester: UdsPhysResp, unpacked by the codec. */
+static void tester_receive(const canfdi_tx_frame_t *f, int64_t t_us)
+{
+  struct canfdi_sil_msg_uds_phys_resp_t m;
+  if (canfdi_sil_msg_uds_phys_resp_unpack(&m, f->data, f->dlc) == 0) {
+    uint8_t b[8];
+    for (unsigned i = 0U; i < 8U; i++) {
+      b[i] = (uint8_t)(m.uds_phys_resp_data >> (8U * (7U - i)));
+    }
+    canfdi_sim_uds_tester_rx(&tester, t_us, b);
+  }
+}
 
 /* What the ECU's SocketCAN filter passes to the application (HIL contract):
  * the setpoints and the sensor frames, not SimPlantStatus. */
@@ -336,7 +378,7 @@ static int apply_action(const canfdi_sim_action_t *a, const canfdi_app_cal_t *ca
     /* power_cycle: the application's power-down (end the cycle, the image
      * to store), the store and load through the NVM port as canfdi-ecu
      * --nvm does it, and a cold start with the loaded image */
-    static uint8_t img[CANFDI_DTC_IMAGE_MAX_BYTES];
+    static uint8_t img[CANFDI_APP_IMAGE_MAX_BYTES];
     int32_t n = canfdi_app_power_down(&app, img, (uint32_t)sizeof img);
     if ((n < 0) || (canfdi_nvm_store(&sil_nvm, img, (uint32_t)n) != CANFDI_OK)) {
       (void)snprintf(msg, cap, "power_cycle at %.3f s: storing the DTC memory failed",
@@ -508,6 +550,9 @@ int main(int argc, char **argv)
       printf("sizeof(canfdi_app_t) = %zu bytes (host; the target figure is in the .bss of "
              "make firmware)\n",
              sizeof(canfdi_app_t));
+      printf("  of which the diagnostic server sizeof(canfdi_uds_t) = %zu, its ISO-TP "
+             "sizeof(canfdi_isotp_t) = %zu\n",
+             sizeof(canfdi_uds_t), sizeof(canfdi_isotp_t));
       return EXIT_SUCCESS;
     } else if (v == NULL) {
       fprintf(stderr, "canfdi-sil: unknown option or missing value '%s'\nTry 'canfdi-sil --help'.\n",
@@ -602,6 +647,7 @@ int main(int argc, char **argv)
     return EXIT_USAGE;
   }
   (void)canfdi_sim_rig_init(&rig, &scn, &sim, (uint8_t)CANFDI_SIM_MODE_LOCKSTEP);
+  canfdi_sim_uds_tester_init(&tester, scn.uds, scn.n_uds);
   n_steps = (uint64_t)llround(scn.duration_s * 1000.0);
   if (!quiet) {
     printf("canfdi-sil: %s, %.3f s, seed %llu, %zu fault(s)\n", scn_path, scn.duration_s,
@@ -650,6 +696,7 @@ int main(int argc, char **argv)
       }
       log_frame(log, channel, t_us, pf[j].id, pf[j].data, pf[j].dlc);
     }
+    tester_send(log, channel, t_us);
     /* the ECU's step */
     if (timing) {
       struct timespec t0;
@@ -674,7 +721,9 @@ int main(int argc, char **argv)
       rf.dlc = f->dlc;
       memcpy(rf.data, f->data, sizeof rf.data);
       rx = canfdi_sim_rig_rx(&rig, &rf, NULL);
-      if (rx == CANFDI_SIM_RIG_RX_ACT_DCM) {
+      if (f->id == CANFDI_SIL_MSG_UDS_PHYS_RESP_FRAME_ID) {
+        tester_receive(f, t_us);
+      } else if (rx == CANFDI_SIM_RIG_RX_ACT_DCM) {
         if (!quiet && (in->dcm.bridge != last_bridge)) {
           printf("  %8.3f  dcm: power stage %s -> %s\n", (double)t_us * 1e-6,
                  (last_bridge == 1U) ? "A" : ((last_bridge == 2U) ? "B" : "none"),
@@ -748,6 +797,19 @@ int main(int argc, char **argv)
         /* EcuDiagnosis: in the log only */
       }
     }
+    if (canfdi_app_reset_requested(&app)) {
+      /* ECUReset answered: the rig is the port, and a hard reset is a
+       * power cycle through the NVM (as canfdi-ecu does it) */
+      canfdi_sim_action_t reset;
+      char amsg[160];
+      memset(&reset, 0, sizeof reset);
+      reset.t_us = t_us;
+      reset.kind = (uint8_t)CANFDI_SIM_ACT_POWER_CYCLE;
+      if (apply_action(&reset, &cal, now_us, quiet, amsg, sizeof amsg) != 0) {
+        printf("FAIL  %s: ECU reset: %s\n", scn_path, amsg);
+        failures++;
+      }
+    }
     if (symptoms && ((k % sym_every) == 0U)) {
       const canfdi_symptoms_t *y = &app.sym;
       fprintf(stderr, "%6.2f rn %5.2f %5.2f %5.2f %5.2f v%x | pd %6.3f %6.3f %6.3f %6.3f v%x | thr rn %5.2f %5.2f %5.2f %5.2f pd %6.3f %6.3f %6.3f %6.3f v%x f%x\n",
@@ -801,6 +863,12 @@ int main(int argc, char **argv)
   /* the DTC expectations and the implicit "nothing else" */
   if (!quiet) {
     printf("\n");
+  }
+  canfdi_sim_uds_tester_finish(&tester);
+  for (i = 0U; i < scn.n_uds; i++) {
+    printf("%s  %s:%u: %s\n", tester.verdict[i].ok ? "PASS" : "FAIL", scn_path, scn.uds[i].line,
+           tester.verdict[i].msg);
+    failures += tester.verdict[i].ok ? 0 : 1;
   }
   for (i = 0U; i < scn.n_expects; i++) {
     if (!expect_done[i] && is_state_expect(&scn.expects[i])) {

@@ -171,6 +171,10 @@ typedef struct {
   const char *needle;
 } bad_t;
 
+/* ten one-character tokens: eleven of them exceed the tokens a line may hold */
+#define TEN_TOKENS " 1 1 1 1 1 1 1 1 1 1"
+
+
 static const bad_t bad[] = {
     {"duration 1\nbogus 3\n", 2U, "unknown directive 'bogus'"},
     {"duration 1\nduration 2\n", 2U, "duplicate duration"},
@@ -219,8 +223,49 @@ static const bad_t bad[] = {
     {"duration 1\nclear 0.5 P9999\n", 2U, "unknown trouble code"},
     {"duration 1\npower_cycle -1\n", 2U, "out of range"},
     {"duration 1\nspeed step 0 1\xc3\xa9\n", 2U, "non-ASCII"},
-    {"duration 1\nspeed step 0 1 2 3 4 5 6 7 8 9 10 11 12 13\n", 2U, "too many tokens"},
+    {"duration 1\nspeed step 0 1 2 3 4 5 6 7 8 9 10 11 12 13\n", 2U, "too many arguments"},
+    {"duration 1\nspeed step" TEN_TOKENS TEN_TOKENS TEN_TOKENS TEN_TOKENS TEN_TOKENS TEN_TOKENS TEN_TOKENS
+     TEN_TOKENS TEN_TOKENS TEN_TOKENS "\n", 2U, "too many tokens"},
+    {"duration 5\nuds 1 phys\n", 2U, "too few arguments"},
+    {"duration 5\nuds 1 can 3E 00\n", 2U, "phys (0x7E0) or func"},
+    {"duration 5\nuds 1 phys 3E 0\n", 2U, "not a hex byte"},
+    {"duration 5\nuds 1 phys expect 7E\n", 2U, "no request bytes"},
+    {"duration 5\nuds 1 phys 3E expect\n", 2U, "expect what"},
+    {"duration 5\nuds 1 phys 3E expect none 00\n", 2U, "nothing may follow"},
+    {"duration 5\nuds 1 phys 3E expect * 00\n", 2U, "not a hex byte"},
+    {"duration 5\nuds 1 func 22 D1 00 D1 01 D1 02 D1\n", 2U, "single frame"},
+    {"duration 5\nuds 2 phys 3E 00\nuds 1 phys 3E 00\n", 3U, "time order"},
+    {"duration 5\nuds 5 phys 3E 00\n", 2U, "at or after the end"},
 };
+
+/* uds lines: the request, the addressing and the expected response. */
+START_TEST(uds_lines)
+{
+  canfdi_sim_scn_err_t err;
+  const canfdi_sim_uds_t *u;
+  ck_assert_int_eq(canfdi_sim_scn_parse(&scn, "duration 5\nuds 1 phys 3E 00 expect 7E 00\n"
+                                              "uds 2 func 3E 80 expect none\nuds 2.5 phys 19 02 ff expect 59 02 FF .. *\n"
+                                              "uds 3 phys 22 F1 95\n",
+                                        "good.scn", &err),
+                   CANFDI_OK);
+  ck_assert_uint_eq(scn.n_uds, 4U);
+  u = &scn.uds[0];
+  ck_assert(!u->functional && u->judged && !u->none && !u->any_tail);
+  ck_assert_int_eq(u->t_us, 1000000);
+  ck_assert_uint_eq(u->req_len, 2U);
+  ck_assert_uint_eq(u->req[0], 0x3EU);
+  ck_assert_uint_eq(u->pat_len, 2U);
+  ck_assert_uint_eq(u->pat[0], 0x7EU);
+  ck_assert(scn.uds[1].functional && scn.uds[1].none);
+  u = &scn.uds[2];
+  ck_assert_uint_eq(u->req[2], 0xFFU);
+  ck_assert(u->any_tail);
+  ck_assert_uint_eq(u->pat_len, 4U);
+  ck_assert_uint_eq(u->pat_any[3], 1U);
+  ck_assert(!scn.uds[3].judged);
+  ck_assert_uint_eq(scn.uds[3].line, 5U);
+}
+END_TEST
 
 START_TEST(bad_input_names_file_and_line)
 {
@@ -337,6 +382,7 @@ static Suite *make_suite(void)
   TCase *tc = tcase_create("parse");
   tcase_add_test(tc, full_scenario_parses);
   tcase_add_test(tc, dtc_directives_parse);
+  tcase_add_test(tc, uds_lines);
   tcase_add_test(tc, setup_applies_initial_conditions_and_faults);
   tcase_add_loop_test(tc, shipped_examples_parse, 0, (int)(sizeof examples / sizeof examples[0]));
   suite_add_tcase(s, tc);

@@ -51,6 +51,9 @@
 #include "ctrl/canfdi_pi.h"
 
 #include "app/canfdi_app.h"
+#include "app/canfdi_app_uds.h"
+#include "comm/canfdi_isotp.h"
+#include "uds/canfdi_uds.h"
 
 /* Inputs the compiler cannot know. */
 static volatile int16_t in_s16[2];
@@ -767,7 +770,78 @@ static void guard_tx(void)
   sink32(canfdi_tx_encode_dtc(&tx, &data.dtc, (in_n & 1U) != 0U, &fr));
   sink32(canfdi_tx_encode_prm_dcm(&tx, &data.prm_dcm, &fr));
   sink32(canfdi_tx_encode_prm_thr(&tx, &data.prm_thr, &fr));
+  sink32(canfdi_tx_encode_uds_resp(&tx, guard_buf, &fr));
   sinku64((uint64_t)fr.data[0] + out[0].data[7] + tx.diag.saturations);
+}
+
+/* comm/canfdi_isotp and uds/: the transport and the diagnostic server. */
+static uint32_t guard_key(uint32_t seed, uint8_t level) { return seed ^ level; }
+
+static void guard_uds(void)
+{
+  static canfdi_isotp_t tp;
+  static canfdi_uds_t uds;
+  static canfdi_dtc_t dtc;
+  static canfdi_uds_sec_t sec;
+  static uint8_t resp[64];
+  canfdi_isotp_cfg_t tcfg;
+  canfdi_uds_cfg_t ucfg;
+  canfdi_uds_sec_cfg_t scfg;
+  canfdi_uds_src_t src = {0};
+  canfdi_uds_act_t act;
+  canfdi_uds_own_t own = {0U, 0U};
+  canfdi_uds_msg_t m;
+  uint8_t frame[CANFDI_CFG_ISOTP_FRAME_BYTES];
+  uint8_t seed[CANFDI_UDS_SEC_SEED_BYTES];
+  const uint8_t *msg = NULL;
+  bool fn = false;
+
+  for (unsigned i = 0U; i < 8U; i++) {
+    frame[i] = in_frame[i];
+  }
+  canfdi_isotp_default_cfg(&tcfg);
+  sink32(canfdi_isotp_init(&tp, &tcfg));
+  sink32(canfdi_isotp_rx_can(&tp, (in_n & 1U) != 0U, frame, (uint8_t)in_n));
+  sinku64(canfdi_isotp_rx_peek(&tp, &msg, &fn) + (fn ? 1U : 0U));
+  canfdi_isotp_rx_release(&tp);
+  sink32(canfdi_isotp_tx_busy(&tp) ? 1 : 0);
+  sinku64((uint64_t)(uintptr_t)canfdi_isotp_tx_buf(&tp));
+  sink32(canfdi_isotp_send(&tp, in_u32));
+  sink32(canfdi_isotp_step(&tp, frame));
+  canfdi_isotp_reset(&tp);
+  canfdi_uds_sec_default_cfg(&scfg);
+  scfg.key_fn = guard_key;
+  sink32(canfdi_uds_sec_init(&sec, &scfg, (uint8_t)in_n, in_u32));
+  canfdi_uds_sec_tick(&sec);
+  sink32(canfdi_uds_sec_request(&sec, frame, in_n, in_u32, seed));
+  sink32(canfdi_uds_sec_level(&sec));
+  canfdi_uds_sec_lock(&sec);
+  sinku64(canfdi_uds_sec_key_default(in_u32, (uint8_t)in_n) + seed[0]);
+  canfdi_uds_default_cfg(&ucfg);
+  sink32(canfdi_uds_init(&uds, &ucfg, (uint8_t)in_n, in_u32));
+  sink32(canfdi_uds_rx_can(&uds, false, frame, (uint8_t)in_n));
+  sink32(canfdi_dtc_init(&dtc, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT));
+  sink32(canfdi_uds_step(&uds, &dtc, &src, &act, frame));
+  sinku64((uint64_t)canfdi_uds_sec_attempts(&uds) + canfdi_uds_nvm_changes(&uds) + canfdi_uds_session(&uds) +
+          act.est_reset);
+  m.req = frame;
+  m.req_len = in_n;
+  m.resp = resp;
+  m.resp_cap = (uint32_t)sizeof resp;
+  m.resp_len = 0U;
+  m.overflow = false;
+  canfdi_uds_put_u8(&m, frame[0]);
+  canfdi_uds_put_u16(&m, canfdi_uds_get_u16(frame));
+  canfdi_uds_put_u24(&m, canfdi_uds_get_u24(frame));
+  canfdi_uds_put_u32(&m, canfdi_uds_get_u32(frame));
+  canfdi_uds_put_s32(&m, canfdi_uds_get_s32(frame));
+  sink32(canfdi_uds_did_find((uint16_t)in_u32));
+  sinku64(canfdi_uds_did_size((uint16_t)in_u32));
+  sink32(canfdi_uds_did_put(&src, &ucfg.ident, &own, (uint16_t)in_u32, &m));
+  sink32(canfdi_uds_dtc_subfn_supported((uint8_t)in_n) ? 1 : 0);
+  sink32(canfdi_uds_dtc_clear(&dtc, &m));
+  sink32(canfdi_uds_dtc_read(&dtc, &m));
+  sinku64((uint64_t)m.resp_len + resp[0]);
 }
 
 /* The application (firmware/app): its whole state is one static instance,
@@ -805,7 +879,9 @@ static void guard_app(void)
   sinku64(canfdi_app_nvm_changes(&app) + canfdi_app_uptime_ms(&app));
   sink32(canfdi_app_power_down(&app, guard_buf, in_u32));
   sink32(canfdi_app_power_up(&app, &cal, in_u32, guard_buf, in_n));
-  sinku64(canfdi_actmon_diag(&app.actmon).steps);
+  sinku64(canfdi_actmon_diag(&app.actmon).steps + (canfdi_app_reset_requested(&app) ? 1U : 0U));
+  canfdi_app_uds_apply(&app);
+  sink32(canfdi_app_uds_stage(&app, out, (int32_t)in_n));
 }
 
 /* Fault-symptom reasoning (firmware/diag/canfdi_diagnosis). */
@@ -869,6 +945,7 @@ int main(void)
   guard_nvm();
   guard_rx();
   guard_tx();
+  guard_uds();
   guard_generated();
   guard_app();
   guard_diagnosis();

@@ -63,6 +63,15 @@ def write(tmp_path: Path, text: str) -> Path:
     ("duration 5\ncycle 2\nclear 1\n", "t.scn:3: clear at 1 s is before the previous"),
     ("duration 5\nclear 1 P9999\n", "t.scn:2: unknown trouble code 'P9999'"),
     ("duration 5\npower_cycle 1 2\n", "t.scn:2: power_cycle <t>"),
+    ("duration 5\nuds 1 phys\n", "t.scn:2: too few arguments"),
+    ("duration 5\nuds 1 can 3E 00\n", "t.scn:2: addressing 'can'"),
+    ("duration 5\nuds 1 phys 3E 0\n", "t.scn:2: '0' is not a hex byte"),
+    ("duration 5\nuds 1 phys expect 7E\n", "t.scn:2: uds: no request bytes"),
+    ("duration 5\nuds 1 phys 3E expect\n", "t.scn:2: expect what"),
+    ("duration 5\nuds 1 phys 3E expect none 00\n", "t.scn:2: nothing may follow"),
+    ("duration 5\nuds 1 func 22 D1 00 D1 01 D1 02 D1\n", "t.scn:2: a functional request is one single frame"),
+    ("duration 5\nuds 2 phys 3E 00\nuds 1 phys 3E 00\n", "t.scn:3: uds at 1 s is before"),
+    ("duration 5\nuds 5 phys 3E 00\n", "t.scn:2: uds request at or after the end"),
 ])
 def test_scenario_errors_name_file_and_line(tmp_path: Path, text: str, needle: str) -> None:
     with pytest.raises(ScenarioError, match=needle.replace("(", r"\(")):
@@ -86,6 +95,22 @@ def test_dtc_directives_parse_like_c(tmp_path: Path) -> None:
     assert check_with_c(p) is None
     # bus-only expectations: nothing SIL-only
     assert not parse(write(tmp_path, "duration 5\nexpect 1 dtc_status P0122 TF=0\n")).sil_only
+
+
+def test_uds_lines_parse_like_c(tmp_path: Path) -> None:
+    p = write(tmp_path, "duration 5\nuds 1 phys 3E 00 expect 7E 00\nuds 2 func 3E 80 expect none\n"
+                        "uds 2.5 phys 19 02 ff expect 59 02 FF .. *\nuds 3 phys 22 F1 95\n")
+    scn = parse(p)
+    u = scn.uds
+    assert [(x.line, x.t_us, x.functional, x.request.hex()) for x in u] == [
+        (2, 1000000, False, "3e00"), (3, 2000000, True, "3e80"), (4, 2500000, False, "1902ff"), (5, 3000000, False, "22f195")]
+    assert u[0].matches(bytes([0x7E, 0x00])) and not u[0].matches(bytes([0x7E, 0x00, 0x00]))
+    assert u[1].none and not u[1].matches(b"\x7e\x00")
+    assert u[2].any_tail and u[2].matches(bytes([0x59, 0x02, 0xFF, 0x01, 0x22, 0x00, 0x2F]))
+    assert not u[2].matches(bytes([0x59, 0x02, 0xFF]))
+    assert not u[3].judged and u[3].matches(b"")
+    assert [w.split(": ")[-1] for w in scn.sil_only] == ["uds"] * 4
+    assert check_with_c(p) is None
 
 
 def test_sil_only_scenario_refused_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

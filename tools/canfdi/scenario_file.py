@@ -2,11 +2,12 @@
 
 The C parser (``canfdi-sim --check -s FILE``) is the authority on the whole
 format; this reader takes only ``duration``, ``seed``, ``fault``, ``expect``,
-the ECU-side actions ``cycle``, ``clear`` and ``power_cycle`` (which only
-the SIL rig performs: ``Scenario.sil_only`` names them) and ``profile``
-(whose CSV file it reads and checks with canfdi.profile_csv, the C reader's
-twin), checks what it takes with the same file:line messages, and accepts
-every other known directive without looking at it. ``check_with_c``
+the ECU-side actions ``cycle``, ``clear`` and ``power_cycle`` and the tester's
+``uds`` requests (which only the SIL rig performs: ``Scenario.sil_only``
+names them) and ``profile`` (whose CSV file it reads and checks with
+canfdi.profile_csv, the C reader's twin), checks what it takes with the same
+file:line messages, and accepts every other known directive without looking
+at it. ``check_with_c``
 runs the C parser too when it has been built, so a file the HIL tools accept
 is never one the simulator would refuse.
 
@@ -27,13 +28,16 @@ from .profile_csv import read as read_profile
 
 MAX_DURATION_S = 100000.0
 DIRECTIVES = ("duration", "seed", "noise", "init", "param", "speed", "angle", "load", "profile", "fault",
-              "expect", "cycle", "clear", "power_cycle")
+              "expect", "cycle", "clear", "power_cycle", "uds")
 ACTIONS = ("cycle", "clear", "power_cycle")
 # expect dtc_status bit names, bit 0 first (ISO 14229-1 DTC status byte)
 STATUS_BITS = ("TF", "TFTOC", "PDTC", "CDTC", "TNCSLC", "TFSLC", "TNCTOC", "WIR")
 # expect freeze signals (canfdi_dtc_ff_t; the SIL rig reads them from the ECU's memory)
 FREEZE_SIGNALS = ("time", "dcm_speed", "dcm_ia", "dcm_ua", "thr_angle", "dcm_supply", "deg_dcm", "deg_thr")
 MAX_ACTIONS = 64
+MAX_UDS = 64
+UDS_BYTES = 64
+MAX_TOKENS = 100
 SIM_BIN = REPO_ROOT / "build" / "bin" / "canfdi-sim"
 
 
@@ -84,6 +88,29 @@ class Action:
     code: str = ""               # clear: the trouble code, '' = all
 
 
+@dataclass(frozen=True)
+class UdsLine:
+    """uds: a tester's request and the response it expects (SIL rig only)."""
+    line: int
+    t_us: int
+    functional: bool
+    request: bytes
+    pattern: tuple[int | None, ...] = ()   # None = '..' (any byte)
+    any_tail: bool = False                 # a final '*'
+    none: bool = False                     # expect none
+    judged: bool = False                   # an expect part was given
+
+    def matches(self, resp: bytes) -> bool:
+        if not self.judged:
+            return True
+        if self.none:
+            return False
+        n = len(self.pattern)
+        if (len(resp) < n) if self.any_tail else (len(resp) != n):
+            return False
+        return all(p is None or p == b for p, b in zip(self.pattern, resp))
+
+
 @dataclass
 class Scenario:
     path: Path
@@ -94,11 +121,13 @@ class Scenario:
     actions: list[Action] = field(default_factory=list)
     profile: Profile | None = None   # the `profile` file, read and checked
     profile_line: int = 0
+    uds: list[UdsLine] = field(default_factory=list)
 
     @property
     def sil_only(self) -> list[str]:
         """'file:line: directive' of every line only the SIL rig can act on (none: HIL can run it)."""
         out = [f"{self.path}:{a.line}: {a.kind}" for a in self.actions]
+        out += [f"{self.path}:{u.line}: uds" for u in self.uds]
         out += [f"{self.path}:{e.line}: expect freeze" for e in self.expects if e.kind == "freeze"]
         return sorted(out, key=lambda w: int(w.rsplit(":", 2)[1]))
 
@@ -267,6 +296,64 @@ def _profile_path(scn_path: Path, tok: str) -> Path:
     return Path(text[:text.rindex("/") + 1] + tok)
 
 
+def _hex_byte(tok: str) -> int | None:
+    if len(tok) == 2 and all(c in "0123456789abcdefABCDEF" for c in tok):
+        return int(tok, 16)
+    return None
+
+
+def _uds(where: str, n: int, tok: list[str], prev: list[UdsLine]) -> UdsLine:
+    usage = "uds <t> <phys|func> <hex byte>... [expect <hex byte|..>... [*] | expect none]"
+    if len(tok) < 4:
+        raise ScenarioError(f"{where}: too few arguments: {usage}")
+    if len(prev) >= MAX_UDS:
+        raise ScenarioError(f"{where}: too many uds lines (at most {MAX_UDS})")
+    t = _num(where, tok[1], "request time", 0.0, MAX_DURATION_S)
+    if tok[2] not in ("phys", "func"):
+        raise ScenarioError(f"{where}: addressing '{tok[2]}': phys (0x7E0) or func (0x7DF)")
+    req: list[int] = []
+    k = 3
+    while k < len(tok) and tok[k] != "expect":
+        if len(req) >= UDS_BYTES:
+            raise ScenarioError(f"{where}: request longer than {UDS_BYTES} bytes")
+        b = _hex_byte(tok[k])
+        if b is None:
+            raise ScenarioError(f"{where}: '{tok[k]}' is not a hex byte (two digits, e.g. 19 or 0A)")
+        req.append(b)
+        k += 1
+    if not req:
+        raise ScenarioError(f"{where}: uds: no request bytes")
+    functional = tok[2] == "func"
+    if functional and len(req) > 7:
+        raise ScenarioError(f"{where}: a functional request is one single frame: at most 7 bytes")
+    pattern: list[int | None] = []
+    any_tail = none = judged = False
+    if k < len(tok):
+        judged = True
+        rest = tok[k + 1:]
+        if rest[:1] == ["none"]:
+            if len(rest) != 1:
+                raise ScenarioError(f"{where}: nothing may follow 'expect none'")
+            none = True
+        elif not rest:
+            raise ScenarioError(f"{where}: expect what? hex bytes, '..' (any byte), a final '*' (any rest), or none")
+        for i, p in enumerate(rest if not none else []):
+            if p == "*" and i == len(rest) - 1:
+                any_tail = True
+            elif len(pattern) >= UDS_BYTES:
+                raise ScenarioError(f"{where}: expected response longer than {UDS_BYTES} bytes")
+            elif p == "..":
+                pattern.append(None)
+            elif _hex_byte(p) is not None:
+                pattern.append(_hex_byte(p))
+            else:
+                raise ScenarioError(f"{where}: '{p}' is not a hex byte, '..' or a final '*'")
+    u = UdsLine(n, to_us(t), functional, bytes(req), tuple(pattern), any_tail, none, judged)
+    if prev and u.t_us < prev[-1].t_us:
+        raise ScenarioError(f"{where}: uds at {t:g} s is before the previous uds line (write them in time order)")
+    return u
+
+
 def parse(path: Path) -> Scenario:
     """Read a scenario; ScenarioError 'file:line: reason' on the first problem."""
     try:
@@ -282,6 +369,8 @@ def parse(path: Path) -> Scenario:
         if not tok:
             continue
         d = tok[0]
+        if len(tok) > MAX_TOKENS:
+            raise ScenarioError(f"{where}: too many tokens (at most {MAX_TOKENS})")
         if d not in DIRECTIVES:
             raise ScenarioError(f"{where}: unknown directive '{d}' ({', '.join(DIRECTIVES)})")
         if d == "duration":
@@ -312,6 +401,8 @@ def parse(path: Path) -> Scenario:
             except ProfileError as e:
                 raise ScenarioError(f"{e} (profile of {where})") from None
             scn.profile_line = n
+        elif d == "uds":
+            scn.uds.append(_uds(where, n, tok, scn.uds))
     if not have_duration:
         raise ScenarioError(f"{path}: no duration (required)")
     for f in scn.faults:
@@ -320,6 +411,10 @@ def parse(path: Path) -> Scenario:
     for a in scn.actions:
         if a.t_us >= scn.duration_us:
             raise ScenarioError(f"{path}:{a.line}: action at or after the end of the scenario "
+                                f"(duration {scn.duration_s:g} s)")
+    for u in scn.uds:
+        if u.t_us >= scn.duration_us:
+            raise ScenarioError(f"{path}:{u.line}: uds request at or after the end of the scenario "
                                 f"(duration {scn.duration_s:g} s)")
     for e in scn.expects:
         if e.t_s > scn.duration_s:

@@ -244,7 +244,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if scn.sil_only:
         print(f"canfdi-scenario: {scn.sil_only[0]} needs the SIL rig: cycle/clear are not sent over the bus yet "
-              "(nor power_cycle, and freeze frames are not read over it); run it with canfdi-sil", file=sys.stderr)
+              "(nor power_cycle; freeze frames are not read over it; uds lines are the SIL rig's tester, "
+              "canfdi-uds is the bus's); run it with canfdi-sil", file=sys.stderr)
         return 2
     if not a.no_start:
         for prog in (a.ecu, a.sim):

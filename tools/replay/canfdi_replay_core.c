@@ -951,6 +951,18 @@ static void run_step(uint32_t now_us)
       ecu_frame(idx, false, f->data, f->dlc, rp.step_log_us);
     }
   }
+  if (canfdi_app_reset_requested(&rp.app)) {
+    /* an ECUReset the replayed server answered (the recording holds the
+     * tester's request): the port's hard reset, a power cycle through the
+     * memory's image, as canfdi-ecu and the SIL rig perform it */
+    int32_t rc;
+    rp.image_len = canfdi_app_power_down(&rp.app, rp.image, (uint32_t)sizeof rp.image);
+    rc = canfdi_app_power_up(&rp.app, &rp.cal, now_us, rp.image, (rp.image_len > 0) ? (uint32_t)rp.image_len : 0U);
+    fprintf(ev, "{\"ev\":\"power_cycle\",\"file\":%d,\"image_bytes\":%d,\"rc\":%d,\"ecu_reset\":true,\"t\":",
+            rp.file_index, (int)rp.image_len, (int)rc);
+    ev_time(rp.step_log_us);
+    fprintf(ev, "}\n");
+  }
   emit_state_changes();
   rp.steps++;
   decide_start(false);

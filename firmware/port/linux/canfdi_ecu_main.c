@@ -27,6 +27,11 @@
  * k > last_k + 1: counted (lockstep_gaps), then stepped. No timing reaches
  * the app, so the ECU's frames are bit-identical to SIL.
  *
+ * ECUReset (UDS 0x11 answered, canfdi_app_reset_requested after a step's
+ * frames left): the application is powered down and up again with its
+ * image (canfdi_ecu_nvm_restart), as a hard reset of the ECU would; the
+ * process, its socket and its clock go on. Counted (ecu_resets).
+ *
  * NVM (--nvm FILE): canfdi_ecu_nvm.h (loaded at start into a new
  * operation cycle, stored in the background while running and at a clean
  * exit). Statistics (--stats): canfdi_ecu_stats.h. Command line:
@@ -40,8 +45,7 @@
  *
  * Identifiers in the kernel filter: DcmSensor 0x010, ThrSensor 0x011,
  * SetpointDcm 0x100, SetpointThr 0x101, SimStep 0x611, and the UDS requests
- * 0x7DF/0x7E0, which reach the app (it has no diagnostic server: they are
- * counted as unknown, SdgFramesUnknown). A SimStep in realtime mode is ignored, counted
+ * 0x7DF/0x7E0, which reach the app's diagnostic server. A SimStep in realtime mode is ignored, counted
  * (simstep_ignored) and reported once: a lockstep plant needs --lockstep.
  *
  * Measured (build/bin/canfdi-ecu-rel, realtime, no plant, inside User-Mode
@@ -107,6 +111,7 @@ static canfdi_socketcan_t sock;
 static canfdi_ecu_hist_t step_hist;
 static canfdi_ecu_hist_t lat_hist;
 static canfdi_ecu_nvm_t nvm;
+static canfdi_app_cal_t cal;
 static volatile sig_atomic_t stop_signal;
 
 static void on_signal(int sig) { stop_signal = sig; }
@@ -175,6 +180,17 @@ static void send_frames(const canfdi_tx_frame_t *out, int32_t n)
   }
 }
 
+/* After a step's frames: an answered ECUReset restarts the application. */
+static void maybe_reset(uint32_t now_us)
+{
+  if (canfdi_app_reset_requested(&app)) {
+    ecu.n.ecu_resets++;
+    if ((canfdi_ecu_nvm_restart(&nvm, &app, &cal, now_us, mono_ns()) == 0) && !ecu.opt.quiet) {
+      fprintf(stderr, PROG ": ECU reset (UDS 0x11): application powered down and up\n");
+    }
+  }
+}
+
 static void lockstep_step(uint32_t k)
 {
   canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
@@ -189,6 +205,7 @@ static void lockstep_step(uint32_t k)
   }
   n = canfdi_app_step(&app, (uint32_t)((uint64_t)k * 1000U), out);
   send_frames(out, n);
+  maybe_reset((uint32_t)((uint64_t)k * 1000U));
   canfdi_ecu_hist_add(&step_hist, ns_to_us_u32(mono_ns() - t));
   ecu.n.steps++;
   ecu.last_k = (int64_t)k;
@@ -329,6 +346,7 @@ static int run_realtime(void)
       t_sched += missed * STEP_NS;
     }
     send_frames(out, canfdi_app_step(&app, app_us(t_start), out));
+    maybe_reset(app_us(t_start));
     t_sched += STEP_NS;
     rc = after_step(t_start, &prev_start);
   }
@@ -379,7 +397,6 @@ static void install_signals(void)
 /* The application with its DTC memory (from NVM when asked). Returns 0 or 1. */
 static int power_up(void)
 {
-  static canfdi_app_cal_t cal;
   int rc = 0;
   canfdi_app_default_cal(&cal);
   if (ecu.opt.nvm_path != NULL) {

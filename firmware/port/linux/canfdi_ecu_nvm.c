@@ -9,7 +9,7 @@
 #include <string.h>
 #include <time.h>
 
-CANFDI_STATIC_ASSERT(CANFDI_NVM_FOOTPRINT(CANFDI_DTC_IMAGE_MAX_BYTES, 1U) <= CANFDI_ECU_NVM_BANK_BYTES,
+CANFDI_STATIC_ASSERT(CANFDI_NVM_FOOTPRINT(CANFDI_APP_IMAGE_MAX_BYTES, 1U) <= CANFDI_ECU_NVM_BANK_BYTES,
                      ecu_nvm_bank_holds_the_dtc_image);
 
 static int64_t mono_ns(void)
@@ -44,7 +44,7 @@ static int32_t store(canfdi_ecu_nvm_t *n, const uint8_t *img, uint32_t len)
 
 static void *nvm_thread(void *arg)
 {
-  static uint8_t local[CANFDI_DTC_IMAGE_MAX_BYTES];
+  static uint8_t local[CANFDI_APP_IMAGE_MAX_BYTES];
   canfdi_ecu_nvm_t *n = (canfdi_ecu_nvm_t *)arg;
   bool quit = false;
   while (!quit) {
@@ -89,7 +89,7 @@ static uint32_t load(canfdi_ecu_nvm_t *n, uint8_t *buf, uint32_t cap)
 int canfdi_ecu_nvm_start(canfdi_ecu_nvm_t *n, const char *path, bool quiet, canfdi_app_t *app,
                          const canfdi_app_cal_t *cal, int64_t now_ns)
 {
-  static uint8_t buf[CANFDI_DTC_IMAGE_MAX_BYTES];
+  static uint8_t buf[CANFDI_APP_IMAGE_MAX_BYTES];
   int32_t rc = canfdi_nvm_file_open(&n->file, path, CANFDI_ECU_NVM_BANK_BYTES, CANFDI_NVM_FILE_CREATE);
   uint32_t len;
   n->path = path;
@@ -156,9 +156,34 @@ void canfdi_ecu_nvm_maybe_store(canfdi_ecu_nvm_t *n, const canfdi_app_t *app, in
   }
 }
 
+int canfdi_ecu_nvm_restart(canfdi_ecu_nvm_t *n, canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us,
+                           int64_t now_ns)
+{
+  static uint8_t buf[CANFDI_APP_IMAGE_MAX_BYTES];
+  const int32_t len = canfdi_app_power_down(app, buf, (uint32_t)sizeof buf);
+  int32_t rc = -CANFDI_EINVAL;
+  if (len >= 0) {
+    if (n->running) {
+      (void)pthread_mutex_lock(&n->mu);
+      memcpy(n->img, buf, (size_t)len);
+      n->len = (uint32_t)len;
+      n->pending = true;
+      (void)pthread_cond_signal(&n->cv);
+      (void)pthread_mutex_unlock(&n->mu);
+    }
+    rc = canfdi_app_power_up(app, cal, now_us, buf, (uint32_t)len);
+  }
+  n->changes_seen = canfdi_app_nvm_changes(app);
+  n->last_ns = now_ns;
+  if (rc != CANFDI_OK) {
+    fprintf(stderr, CANFDI_ECU_PROG ": ECU reset: the application did not power up again (%d)\n", (int)rc);
+  }
+  return (rc == CANFDI_OK) ? 0 : 1;
+}
+
 int canfdi_ecu_nvm_finish(canfdi_ecu_nvm_t *n, canfdi_app_t *app, bool do_store)
 {
-  static uint8_t buf[CANFDI_DTC_IMAGE_MAX_BYTES];
+  static uint8_t buf[CANFDI_APP_IMAGE_MAX_BYTES];
   int32_t len;
   int32_t rc = CANFDI_OK;
   if (!n->running) {

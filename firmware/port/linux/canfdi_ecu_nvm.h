@@ -15,7 +15,7 @@
  * interrupted one (no healing step for it, as after a power cut on a real
  * ECU). Clean exit: canfdi_app_power_down ends the cycle and the image is
  * stored synchronously.
- * Memory: the instance holds two image buffers of CANFDI_DTC_IMAGE_MAX_BYTES
+ * Memory: the instance holds two image buffers of CANFDI_APP_IMAGE_MAX_BYTES
  * and the file port; static in the port.
  */
 #ifndef CANFDI_ECU_NVM_H
@@ -42,7 +42,7 @@ typedef struct {
   bool running;
   bool pending; /* under mu: an image waits for the thread */
   bool quit;    /* under mu */
-  uint8_t img[CANFDI_DTC_IMAGE_MAX_BYTES]; /* under mu */
+  uint8_t img[CANFDI_APP_IMAGE_MAX_BYTES]; /* under mu */
   uint32_t len;                            /* under mu */
   canfdi_nvm_file_t file;
   canfdi_nvm_t nvm;
@@ -60,6 +60,13 @@ int canfdi_ecu_nvm_start(canfdi_ecu_nvm_t *n, const char *path, bool quiet, canf
 
 /* Outside the step: hands a new image to the thread when due. */
 void canfdi_ecu_nvm_maybe_store(canfdi_ecu_nvm_t *n, const canfdi_app_t *app, int64_t now_ns);
+
+/* ECUReset: powers the app down, hands the image to the background store
+ * (the next power-up's image) and powers the app up from it at now_us.
+ * Returns 0, or 1 with a message on stderr. Without a started NVM the
+ * image goes from power-down to power-up in RAM. */
+int canfdi_ecu_nvm_restart(canfdi_ecu_nvm_t *n, canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t now_us,
+                           int64_t now_ns);
 
 /* Stops the thread; with store, powers the app down and stores its image.
  * Returns 0, or 1 with a message on stderr. No-op (0) when not started. */

@@ -65,6 +65,7 @@ int canfdi_ecu_write_stats(const char *path, const canfdi_ecu_report_t *r)
   fprintf(f, "  \"stale_steps\": %" PRIu64 ",\n", c->stale_steps);
   fprintf(f, "  \"simstep_bad_length\": %" PRIu64 ",\n", c->simstep_bad_length);
   fprintf(f, "  \"simstep_ignored\": %" PRIu64 ",\n", c->simstep_ignored);
+  fprintf(f, "  \"ecu_resets\": %" PRIu64 ",\n", c->ecu_resets);
   fprintf(f, "  \"frames_rx\": %" PRIu32 ",\n", r->sock->rx_frames);
   fprintf(f, "  \"frames_tx\": %" PRIu32 ",\n", r->sock->tx_frames);
   fprintf(f, "  \"frames_to_app\": %" PRIu64 ",\n", c->frames_to_app);

@@ -4,7 +4,7 @@
  * file of --stats.
  *
  * JSON keys: mode, iface, run_s, steps, deadline_misses, skipped_periods,
- * lockstep_gaps, stale_steps, simstep_bad_length, simstep_ignored,
+ * lockstep_gaps, stale_steps, simstep_bad_length, simstep_ignored, ecu_resets,
  * frames_rx, frames_tx, frames_to_app, frames_rejected and frames_unknown
  * (the app's input supervision), tx_drops, tx_retries, rx_kernel_drops,
  * socket_errors, nvm {stores, failures, store_us_max}, step_us and
@@ -41,6 +41,7 @@ typedef struct {
   uint64_t simstep_ignored; /* SimStep frames in realtime mode */
   uint64_t socket_errors;
   uint64_t frames_to_app;
+  uint64_t ecu_resets;      /* UDS ECUReset: application powered down and up */
 } canfdi_ecu_counts_t;
 
 typedef struct {
