@@ -38,6 +38,7 @@ int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg
     m->w_prev_ok = false;
     m->jump_hold = 0U;
     m->jump = false;
+    m->r1_mean_q32 = 0;
     rc = CANFDI_OK;
   }
   return rc;
@@ -185,6 +186,72 @@ static void dcm_rax(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   }
 }
 
+static int32_t sgn_s32(int32_t x)
+{
+  return (x > 0) ? 1 : ((x < 0) ? -1 : 0);
+}
+
+/* The flux-loss prediction of the header (canfdi_symptoms.h dcm_fx_q16). */
+static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+{
+  const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
+  const int32_t psi = in->est_dcm->cfg.psi_nom_q16;
+  int32_t sens[CANFDI_SYM_N_RES];
+  int32_t sg[CANFDI_SYM_N_RES];
+  int32_t r1_hp = 0;
+  int32_t d_mech = 0; /* dPsi explaining r2..r4, Q28 V s */
+  int32_t d_r1 = 0;   /* dPsi explaining r1's newer part */
+  bool any = false;
+  bool ok = (pd != NULL) && in->dcm_in_ok && (psi > 0);
+  uint32_t j;
+  for (j = 0U; j < CANFDI_SYM_N_RES; j++) {
+    s->dcm_fx_q16[j] = 0;
+  }
+  if (ok && ((s->dcm_rn_valid & 1U) != 0U)) {
+    const canfdi_q31_t a = canfdi_parity_dcm_load_alpha_q31(in->parity_dcm);
+    if (a != 0) {
+      const int64_t d = canfdi_sub_s64_sat((int64_t)pd->r_q16[0] * 65536, m->r1_mean_q32);
+      m->r1_mean_q32 = canfdi_add_s64_sat(m->r1_mean_q32, canfdi_mul_s64_q31(d, a));
+      r1_hp = canfdi_sub_s32_sat(pd->r_q16[0], canfdi_sat_s64_to_s32(canfdi_asr64_rnd(m->r1_mean_q32, 16U)));
+    } else {
+      r1_hp = pd->r_q16[0];
+    }
+  }
+  if (ok) {
+    const int32_t ri = canfdi_mul_s32_qn(pd->ra_hat_ohm_q24 / 256, in->dcm_i_A_q16, 16U);
+    const int32_t e4 = canfdi_sub_s32_sat(ri, canfdi_mul_s32_qn(psi, in->dcm_w_rad_s_q16, 16U));
+    sens[0] = canfdi_q31_abs(in->dcm_w_rad_s_q16);
+    sens[1] = canfdi_q31_abs(in->dcm_i_A_q16);
+    sens[2] = sens[1];
+    sens[3] = canfdi_div_s32_qn(canfdi_q31_abs(e4), psi, 16U);
+    sg[0] = -sgn_s32(in->dcm_w_rad_s_q16);
+    sg[1] = sgn_s32(in->dcm_i_A_q16);
+    sg[2] = sg[1];
+    sg[3] = sgn_s32(e4);
+    for (j = 0U; ok && (j < CANFDI_SYM_N_RES); j++) {
+      if (((s->dcm_rn_valid & (1U << j)) != 0U) && (canfdi_q31_abs(pd->rn_q16[j]) >= CANFDI_APP_SYM_FX_EXPLAIN_RN)) {
+        any = true;
+        if ((sens[j] == 0) || (sgn_s32(pd->r_q16[j]) != sg[j])) {
+          ok = false; /* no flux loss gives this residual */
+        } else if (j == 0U) {
+          d_r1 = canfdi_div_s32_qn(canfdi_q31_abs(r1_hp), sens[0], 28U);
+        } else {
+          const int32_t dj = canfdi_div_s32_qn(canfdi_q31_abs(pd->r_q16[j]), sens[j], 28U);
+          d_mech = (dj > d_mech) ? dj : d_mech;
+        }
+      }
+    }
+  }
+  if (ok && any) {
+    const int32_t d_all = (d_r1 > d_mech) ? d_r1 : d_mech;
+    for (j = 0U; j < CANFDI_SYM_N_RES; j++) {
+      const int32_t res = canfdi_mul_s32_qn((j == 0U) ? d_mech : d_all, sens[j], 28U);
+      s->dcm_fx_q16[j] = (pd->thr_q16[j] > 0) ? canfdi_div_s32_qn(res, pd->thr_q16[j], 16U) : INT32_MAX;
+    }
+    s->flags |= CANFDI_SYM_F_DCM_FX_VALID;
+  }
+}
+
 static void dcm_parameters(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
   const canfdi_est_dcm_t *e = in->est_dcm;
@@ -265,5 +332,6 @@ void canfdi_app_sym_build(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   speed_jump(m, in, s);
   s->flags |= m->jump ? CANFDI_SYM_F_DCM_W_JUMP : 0U;
   dcm_rax(in, s);
+  dcm_flux_pred(m, in, s);
   s->dcm_ua_cmd_rn_q16 = uac_channel(in, s);
 }

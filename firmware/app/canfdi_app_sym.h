@@ -40,6 +40,23 @@
  * r1 stays out of its band (a sensor step leaves r1 out of band; a single
  * noisy sample does not).
  *
+ * Flux-loss prediction (canfdi_symptoms_t dcm_fx_q16, the physics there).
+ * The smallest flux loss that explains the residuals beyond their
+ * thresholds is dPsi = max_j |r_j| / s_j over those residuals, with the
+ * sensitivities s1 = |w|, s2 = s3 = |I_A|, s4 = |R_A I_A - Psi w| / Psi
+ * (R_A the parity equations' tracked value, Psi nominal); each residual's
+ * prediction is dPsi s_k / threshold_k. r1 enters the prediction of
+ * r2..r4 high-passed like them: minus its own mean over the load tracking
+ * time (canfdi_parity_dcm_load_alpha_q31, tracked while r1 is valid), so a
+ * drift slower than that time constant, which r2..r4 cannot show, does
+ * not make their zeros count against a flux loss. r2..r4 enter the
+ * prediction of r1 as they are (already high-passed: an underestimate of
+ * dPsi, so a smaller prediction, on the cautious side). A residual beyond
+ * its threshold with the sign opposite to a flux loss's, or one whose
+ * sensitivity is 0, leaves the prediction not valid (no flux loss
+ * explains it). Scaling: dPsi in Q28 V s (saturating at 8 V s), products
+ * and quotients by canfdi_mul_s32_qn / canfdi_div_s32_qn (saturating).
+ *
  * Operating-point references (canfdi_symptoms_t dcm_ref, thr_ref: the signs
  * a rule's entries may follow, canfdi_diagnosis.h): the sign of the speed
  * and the armature current, of the throttle's voltage command and motor
@@ -48,8 +65,10 @@
  *
  * Scaling and overflow: Q16.16; deviations by canfdi_div_s32_qn
  * (saturating), differences by saturating subtraction. Cost: 8 saturating
- * divisions, 2 multiplications and ~50 compares per step. Memory: 48 bytes
- * of state and configuration; no heap.
+ * divisions, 2 multiplications and ~50 compares per step, plus for the
+ * flux-loss prediction up to 9 divisions and 8 multiplications while a
+ * residual is beyond its threshold. Memory: 56 bytes of state and
+ * configuration; no heap.
  */
 #ifndef CANFDI_APP_SYM_H
 #define CANFDI_APP_SYM_H
@@ -67,6 +86,12 @@
  * the spread of a fresh armature estimate; below that the estimate can
  * neither claim nor exclude R_A. */
 #define CANFDI_APP_SYM_RAX_MIN_RN 3
+
+/* The flux-loss prediction explains the residuals at or above this share
+ * of their thresholds (Q16.16, 0.8): the diagnosis' zero level (off,
+ * canfdi_diagnosis.h), below which a residual counts as a zero; above it
+ * a residual is not a zero, so a flux loss must account for it. */
+#define CANFDI_APP_SYM_FX_EXPLAIN_RN 52429
 
 typedef struct {
   int32_t dcm_w_on_rad_s_q16;   /* > 0: |w| at which the speed's sign counts */
@@ -87,6 +112,7 @@ typedef struct {
   bool w_prev_ok;               /* w_prev_q16 is the previous step's valid sample */
   uint16_t jump_hold;           /* steps the jump flag is held at least */
   bool jump;                    /* the jump flag */
+  int64_t r1_mean_q32;          /* r1's mean over the parity's load_tau (V, Q32) */
 } canfdi_app_sym_t;
 
 typedef struct {

@@ -16,6 +16,7 @@
 CANFDI_STATIC_ASSERT(CANFDI_FAULT_COUNT <= 32U, fault_ids_fit_the_mask);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_FLAGS <= 16U, flags_fit_uint16);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_COMP_THR < CANFDI_DIAG_N_COMP, components_fit);
+CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_RULES <= 32U, rules_fit_the_gate_mask);
 
 /* Test verdicts while combining a hard and a model rule of one fault. */
 #define V_NA 0U   /* no such test */
@@ -65,6 +66,7 @@ void canfdi_diagnosis_default_cfg(canfdi_diagnosis_cfg_t *cfg)
     cfg->conf_min_pct = 50U;
     cfg->margin_pct = 10U;
     cfg->par_fresh_updates = 20U;
+    cfg->par_memory_updates = 100U;
     /* 1 % = 655.36 in Q16.16 */
     cfg->dcm_par_pos_q16[CANFDI_SYM_DCM_P_RA] = 5243;   /* +8 % */
     cfg->dcm_par_neg_q16[CANFDI_SYM_DCM_P_RA] = 13107;  /* -20 % */
@@ -107,7 +109,7 @@ int32_t canfdi_diagnosis_cfg_check(const canfdi_diagnosis_cfg_t *cfg)
              !steps_ok(cfg->sym_on_steps) || !steps_ok(cfg->sym_off_steps) ||
              !steps_ok(cfg->flag_on_steps) || !steps_ok(cfg->flag_off_steps) ||
              !steps_ok(cfg->isolate_steps) || (cfg->conf_min_pct > 100U) || (cfg->margin_pct > 100U) ||
-             (cfg->par_fresh_updates > STEPS_MAX) ||
+             (cfg->par_fresh_updates > STEPS_MAX) || (cfg->par_memory_updates > STEPS_MAX) ||
              !par_ok(cfg->jpsi_q16)) {
     rc = -CANFDI_EINVAL;
   } else {
@@ -148,6 +150,9 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
     }
     for (j = 0U; j < CANFDI_DIAG_N_FLAGS; j++) {
       pers_clear(&d->flag[j], CANFDI_DIAG_SYM_ZERO);
+    }
+    for (j = 0U; j < CANFDI_SYM_N_RES; j++) {
+      d->fx_blind[j] = 0U;
     }
     d->corr_not_isolated = false;
     d->failed_mask = 0U;
@@ -197,6 +202,61 @@ static void compile_rule(const canfdi_diag_model_rule_t *r, canfdi_diagnosis_rul
   }
 }
 
+/*
+ * The model rules whose residual zeros must be evidence against a flux
+ * loss (init only): every DC-motor rule other than the flux rule itself,
+ * unless it requires a symptom on a channel the flux rule expects at zero
+ * (R_A up: the R_A estimate; U_A offset: UAC): that symptom already tells
+ * it from a flux loss, whatever the residuals' zeros say. *flux: the flux
+ * rule's index (CANFDI_DIAG_N_RULES if there is none).
+ */
+static uint32_t flux_gated_rules(const canfdi_diagnosis_rule_t rule[], uint8_t *flux)
+{
+  uint32_t fz = 0U;
+  uint32_t gated = 0U;
+  uint32_t i;
+  *flux = (uint8_t)CANFDI_DIAG_N_RULES;
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    if (canfdi_diag_model_rules[i].fault == CANFDI_FAULT_DCM_FLUX_DOWN) {
+      fz = rule[i].zero;
+      *flux = (uint8_t)i;
+    }
+  }
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    const canfdi_diagnosis_rule_t *m = &rule[i];
+    if ((canfdi_diag_model_rules[i].comp == CANFDI_DIAG_COMP_DCM) && (i != (uint32_t)*flux) &&
+        (((uint32_t)m->nec & (uint32_t)(m->pos | m->neg) & fz) == 0U)) {
+      gated |= ((uint32_t)1U << i);
+    }
+  }
+  return gated;
+}
+
+/*
+ * The estimates exclude a flux loss: both DC-motor estimators have had
+ * their memory's worth of updates (par_memory_updates) since the symptoms
+ * appeared, and a necessary parameter entry of the flux rule (Psi -, J/Psi
+ * +) is observed at zero or with the other sign. Before that memory has
+ * passed an estimate mixes the data from before the fault with a
+ * transient: while a flux loss develops at constant speed the mechanical
+ * estimate may swing either way.
+ */
+static bool flux_excluded(const canfdi_diagnosis_t *d)
+{
+  bool ex = false;
+  if ((d->flux_rule < CANFDI_DIAG_N_RULES) &&
+      (d->fresh[CANFDI_DIAG_COMP_DCM][0] >= d->cfg.par_memory_updates) &&
+      (d->fresh[CANFDI_DIAG_COMP_DCM][1] >= d->cfg.par_memory_updates)) {
+    const canfdi_diagnosis_rule_t *f = &d->rule[d->flux_rule];
+    const uint32_t par = (uint32_t)f->nec & ~(uint32_t)(f->ref_a | f->ref_b);
+    const uint32_t contra = ((uint32_t)f->pos & (uint32_t)(d->obs_zero | d->obs_neg)) |
+                            ((uint32_t)f->neg & (uint32_t)(d->obs_zero | d->obs_pos)) |
+                            ((uint32_t)f->zero & (uint32_t)(d->obs_pos | d->obs_neg));
+    ex = (par & contra) != 0U;
+  }
+  return ex;
+}
+
 int32_t canfdi_diagnosis_init(canfdi_diagnosis_t *d, const canfdi_diagnosis_cfg_t *cfg)
 {
   int32_t rc = -CANFDI_EINVAL;
@@ -216,6 +276,7 @@ int32_t canfdi_diagnosis_init(canfdi_diagnosis_t *d, const canfdi_diagnosis_cfg_
       for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
         compile_rule(&canfdi_diag_model_rules[i], &d->rule[i]);
       }
+      d->fx_gated = flux_gated_rules(d->rule, &d->flux_rule);
       d->diag = (canfdi_diagnosis_diag_t){0};
       d->initialised = true;
       canfdi_diagnosis_reset(d);
@@ -300,7 +361,7 @@ static void count_fresh(canfdi_diagnosis_t *d, uint32_t c, uint8_t upd)
     const bool u = ((((uint32_t)upd) >> k) & 1U) != 0U;
     if (!d->res[c].detected) {
       d->fresh[c][k] = 0U;
-    } else if (u && (d->fresh[c][k] < d->cfg.par_fresh_updates)) {
+    } else if (u && ((d->fresh[c][k] < d->cfg.par_fresh_updates) || (d->fresh[c][k] < d->cfg.par_memory_updates))) {
       d->fresh[c][k]++;
     } else {
       /* no update, or enough */
@@ -360,6 +421,19 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
   channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_DIAG_CH_DCM_JPSI, x, v);
   channel(d, CANFDI_DIAG_COMP_DCM, CANFDI_DIAG_CH_DCM_UAC, s->dcm_ua_cmd_rn_q16,
           (s->flags & CANFDI_SYM_F_DCM_UA_CMD_VALID) != 0U);
+  for (i = 0U; i < CANFDI_SYM_N_RES; i++) {
+    /* a flux loss of the size the residuals show would leave residual i
+     * below the zero level: its zero is no evidence against one, and
+     * stays none until the prediction held above it for sym_on_steps
+     * (as long as a flux loss would need to make it a symptom) */
+    if (((s->flags & CANFDI_SYM_F_DCM_FX_VALID) != 0U) && (s->dcm_fx_q16[i] < d->cfg.off_q16)) {
+      d->fx_blind[i] = d->cfg.sym_on_steps;
+    } else if (d->fx_blind[i] > 0U) {
+      d->fx_blind[i]--;
+    } else {
+      /* seen */
+    }
+  }
   channel(d, CANFDI_DIAG_COMP_THR, 8U, 0, false);
   channel(d, CANFDI_DIAG_COMP_THR, 9U, 0, false);
   for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
@@ -426,6 +500,14 @@ static void observe(canfdi_diagnosis_t *d, uint32_t c)
   d->obs_pos = pos;
   d->obs_neg = neg;
   d->obs_zero = zero;
+  d->obs_zero_fx = zero;
+  if (c == CANFDI_DIAG_COMP_DCM) {
+    for (j = 0U; j < CANFDI_SYM_N_RES; j++) {
+      if (d->fx_blind[j] > 0U) {
+        d->obs_zero_fx = (uint16_t)(d->obs_zero_fx & ~(1U << j));
+      }
+    }
+  }
 }
 
 /* The rule's entries that follow an operating-point sign: those to flip
@@ -452,15 +534,15 @@ static rule_refs_t refs_of(const canfdi_diagnosis_rule_t *m, const int8_t ref[2]
  * Sums: <= 10 entries x 2 x 16.0 in Q16.16 < 2^22; x 100 < 2^29.
  */
 static bool eval_rule(const canfdi_diagnosis_t *d, const canfdi_diagnosis_rule_t *m, int8_t pol,
-                      const rule_refs_t *rr, uint32_t *pct)
+                      const rule_refs_t *rr, uint32_t obs_zero, uint32_t *pct)
 {
   const uint32_t op = ((uint32_t)d->obs_pos & ~rr->flip) | ((uint32_t)d->obs_neg & rr->flip);
   const uint32_t on = ((uint32_t)d->obs_neg & ~rr->flip) | ((uint32_t)d->obs_pos & rr->flip);
   const uint32_t want_p = (pol > 0) ? m->pos : m->neg;
   const uint32_t want_n = (pol > 0) ? m->neg : m->pos;
   const uint32_t care = (uint32_t)m->care & ~rr->unknown;
-  const uint32_t hit = ((want_p & op) | (want_n & on) | ((uint32_t)m->zero & d->obs_zero)) & care;
-  const uint32_t seen = care & (uint32_t)(d->obs_pos | d->obs_neg | d->obs_zero);
+  const uint32_t hit = ((want_p & op) | (want_n & on) | ((uint32_t)m->zero & obs_zero)) & care;
+  const uint32_t seen = care & ((uint32_t)(d->obs_pos | d->obs_neg) | obs_zero);
   bool cand = ((m->nec & rr->unknown) == 0U) && ((m->nec & ~hit) == 0U) && (seen != 0U);
   if (cand) {
     uint32_t tot = 0U;
@@ -494,6 +576,7 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
 {
   canfdi_diagnosis_result_t *res = &d->res[c];
   uint8_t pct_of[CANFDI_DIAG_N_RULES];
+  const bool fx_off = (c != CANFDI_DIAG_COMP_DCM) || flux_excluded(d);
   uint32_t i;
   res->best = 0U;
   res->best_pct = 0U;
@@ -504,10 +587,12 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
     pct_of[i] = 0U;
     if (r->comp == c) {
       const rule_refs_t rr = refs_of(&d->rule[i], d->ref[c]);
+      const bool gate = (((d->fx_gated >> i) & 1U) != 0U) && !fx_off;
+      const uint32_t zero = gate ? d->obs_zero_fx : d->obs_zero;
       uint32_t pct = 0U;
       uint32_t p2 = 0U;
-      bool cand = eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &rr, &pct);
-      if ((r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &rr, &p2)) {
+      bool cand = eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &rr, zero, &pct);
+      if ((r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &rr, zero, &p2)) {
         if (!cand || (p2 > pct)) {
           pct = p2;
         }

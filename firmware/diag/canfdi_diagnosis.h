@@ -110,6 +110,23 @@
  *    For the throttle, a persistent CORR symptom that is not isolated sets
  *    corr_not_isolated: the application reports P2135 (dtcs.csv has it
  *    without a fault id).
+ *  - The flux gate (DC motor). A developing flux loss moves the residuals
+ *    in fixed ratios (canfdi_symptoms.h dcm_fx_q16), so early in a ramp
+ *    one of them leaves its band alone: r1 at high speed and low current
+ *    (a speed-sensor offset's or gain's pattern), r2/r3 at low speed and
+ *    high current (friction's), r1..r3 without r4 where Psi w = R_A I_A
+ *    (an I_A offset's). A residual's zero is evidence against a flux loss
+ *    only while the flux loss that explains the residuals beyond their
+ *    thresholds would have put it at `off` or above for sym_on_steps (as
+ *    long as that flux loss would need to make it a symptom; fx_blind). For the gated rules (every
+ *    DC-motor rule except flux's own and those that require a symptom on a
+ *    channel the flux rule expects at zero: R_A up through the R_A
+ *    estimate, U_A offset through UAC) such zeros do not count (neither
+ *    confirmed nor contradicting: the rule is not yet a candidate if it
+ *    needs one). The gate opens when the estimates exclude a flux loss:
+ *    both estimators have had par_memory_updates updates since the
+ *    symptoms appeared and a necessary parameter entry of the flux rule
+ *    (Psi -, J/Psi +) is seen at zero or with the other sign.
  *  - A fault with both a hard and a model rule (14, 15, 19, 20): FAILED if
  *    either fires; PASSED only if both tests ran and passed.
  *  - Hard-rule faults are PASSED while their condition is false (the flag
@@ -153,7 +170,7 @@
  * cycles; ~0.15 ms at 48 MHz for 7 k.) Code: 3.7 kB (M0+), 3.5 kB (M4),
  * ROM tables included. Stack (-fstack-usage, M0+): step 176 bytes plus a
  * 40-byte callee.
- * Memory: sizeof(canfdi_diagnosis_t) = 656 bytes on a 32-bit target
+ * Memory: sizeof(canfdi_diagnosis_t) = 672 bytes on a 32-bit target
  * (configuration copy 92, reciprocals 68, channel and flag persistence 180,
  * normalised values 80, compiled rules 140, weights 40, results 16,
  * diagnostics 20, state). No heap, no globals besides const tables, no
@@ -198,6 +215,7 @@
  * Calibration (copied at init). Domain, else -CANFDI_EINVAL:
  * 0 < off <= on <= 16.0; 1.0 <= weight_cap <= 16.0; step counts 1..10000;
  * par_fresh_updates 0..10000 (0: every parameter 0 counts at once);
+ * par_memory_updates 0..10000;
  * conf_min 0..100; margin 0..100; every parameter threshold and jpsi in
  * [0.001, 10.0] (0.1 % .. 1000 %).
  */
@@ -222,6 +240,10 @@ typedef struct {
   int32_t jpsi_q16;       /* |dev(J) - dev(Psi)| at which J/Psi is +-1.0 */
   uint16_t par_fresh_updates; /* estimator updates after a symptom before a
                                * parameter channel's 0 counts as absence */
+  uint16_t par_memory_updates; /* ... before an estimate reflects only the
+                                * data since (the estimators' memory): from
+                                * then on the estimates may exclude a flux
+                                * loss (the flux gate, header) */
 } canfdi_diagnosis_cfg_t;
 
 /* Result per component. */
@@ -278,12 +300,20 @@ typedef struct {
   uint16_t obs_pos;  /* observed masks of that component */
   uint16_t obs_neg;
   uint16_t obs_zero;
+  uint16_t obs_zero_fx; /* obs_zero without the residual zeros a flux loss
+                         * would not have disturbed (flux-gated rules) */
+  uint16_t fx_blind[CANFDI_SYM_N_RES]; /* DC motor: steps a residual's zero
+                                        * stays no evidence against a flux
+                                        * loss, <= sym_on_steps */
+  uint32_t fx_gated; /* bit i: model rule i is flux-gated */
+  uint8_t flux_rule; /* index of the flux rule (CANFDI_DIAG_N_RULES: none) */
   int8_t ref[CANFDI_DIAG_N_COMP][2]; /* operating-point signs of this step */
   uint16_t win_n[CANFDI_DIAG_N_COMP]; /* consecutive wins of res.best */
   bool latched[CANFDI_DIAG_N_COMP];   /* res.isolated came from the model rules */
   uint16_t fresh[CANFDI_DIAG_N_COMP][2]; /* estimator updates (A, B) since the
                                           * component's symptoms appeared,
-                                          * <= par_fresh_updates */
+                                          * <= max(par_fresh_updates,
+                                          * par_memory_updates) */
   uint8_t win_id[CANFDI_DIAG_N_COMP];
   bool corr_not_isolated;
   bool initialised;

@@ -11,7 +11,7 @@
  * the threshold, sign kept); parameter deviations are (estimate - nominal) /
  * nominal in Q16.16 (6554 ~ +10 %). A quantity whose valid bit is clear must
  * be ignored (not converged, excluded, or not computed in this mode).
- * Memory: 80 bytes on a 32-bit target. Cost: none (data only).
+ * Memory: 96 bytes on a 32-bit target. Cost: none (data only).
  */
 #ifndef CANFDI_SYMPTOMS_H
 #define CANFDI_SYMPTOMS_H
@@ -62,6 +62,7 @@
 #define CANFDI_SYM_F_TPS2_INVALID (1UL << 12)
 #define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 13) /* dcm_ua_cmd_rn_q16 valid */
 #define CANFDI_SYM_F_DCM_RAX_VALID (1UL << 14)    /* dcm_rax_q16 valid */
+#define CANFDI_SYM_F_DCM_FX_VALID (1UL << 15)     /* dcm_fx_q16 valid */
 
 /* Estimator updates (dcm_upd / thr_upd): A = the equation of R_A and Psi
  * (DC motor: armature) or R and K (throttle: electrical); B = the equation
@@ -104,6 +105,21 @@ typedef struct {
    * band (nothing to explain). Valid (CANFDI_SYM_F_DCM_RAX_VALID) while the
    * armature estimator has converged and is fed. */
   int32_t dcm_rax_q16;
+  /* Flux-loss prediction: per residual, the normalised value (1.0 = its
+   * threshold) that the smallest flux loss which explains the residuals
+   * now beyond their thresholds would give it. A flux loss dPsi moves
+   * r1 = -dPsi w, r2 = r3 = +dPsi I_A, r4 = dPsi (R_A I_A - Psi w) / Psi
+   * (canfdi_parity_dcm.h); r2..r4 follow their own mean over the load
+   * tracking time (load_tau), so what they can show of a flux change is
+   * the part of r1 that is newer than that mean. Where the prediction is
+   * below a residual's zero level, that residual's zero does not tell a
+   * developing flux loss from a fault that leaves the residual alone (at
+   * 100 rad/s and 4 A a flux loss that puts r1 at 3 thresholds moves r2 by
+   * 0.7 of its threshold: the pattern of a speed-sensor offset).
+   * Valid (CANFDI_SYM_F_DCM_FX_VALID) while some residual is beyond its
+   * threshold and every such residual has the sign a flux loss gives it
+   * (else no flux loss explains them and every zero counts). */
+  int32_t dcm_fx_q16[CANFDI_SYM_N_RES];
   /* Which estimator applied an update in this step (CANFDI_SYM_UPD_*): the
    * diagnosis counts them to know whether a parameter channel's zero
    * carries evidence from after a symptom appeared (canfdi_diagnosis.h,

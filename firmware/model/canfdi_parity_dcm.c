@@ -747,6 +747,11 @@ const canfdi_parity_dcm_diag_t *canfdi_parity_dcm_diag(const canfdi_parity_dcm_t
   return (p != NULL) ? &p->diag : NULL;
 }
 
+canfdi_q31_t canfdi_parity_dcm_load_alpha_q31(const canfdi_parity_dcm_t *p)
+{
+  return ((p != NULL) && (p->cfg != NULL)) ? p->load_alpha_q31 : 0;
+}
+
 void canfdi_parity_dcm_default_cfg(canfdi_parity_dcm_cfg_t *cfg)
 {
   unsigned k;

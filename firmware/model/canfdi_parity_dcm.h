@@ -474,4 +474,9 @@ const canfdi_parity_dcm_out_t *canfdi_parity_dcm_out(const canfdi_parity_dcm_t *
 /* The counters (NULL for NULL). O(1). */
 const canfdi_parity_dcm_diag_t *canfdi_parity_dcm_diag(const canfdi_parity_dcm_t *p);
 
+/* T / load_tau in Q31, the weight with which r2..r4 follow their means (0
+ * when load_tau_s is 0 or for NULL/uninitialised): a caller that compares
+ * r1 with r2..r4 applies the same high-pass to r1. O(1). */
+canfdi_q31_t canfdi_parity_dcm_load_alpha_q31(const canfdi_parity_dcm_t *p);
+
 #endif /* CANFDI_PARITY_DCM_H */
