@@ -270,7 +270,8 @@ static void usage(FILE *out)
           "                        step, then a flag byte: bit 0 / 1 DC-motor / throttle burst\n"
           "                        on (scheduler ON), bit 2 / 3 DC-motor / throttle excitation\n"
           "                        applied (generator gated on), bit 4 / 5 DC-motor / throttle\n"
-          "                        setpoint inside its enabling window (make bench-driveability)\n"
+          "                        setpoint inside the product's enabling window\n"
+          "                        (make bench-driveability)\n"
           "      --timing          wall-clock time of canfdi_app_step: mean and max\n"
           "      --symptoms[=MS]   print the symptom vector every MS ms (default 100) on stderr\n"
           "      --sizes           print the firmware's RAM use and exit\n"
@@ -501,7 +502,9 @@ static int apply_test_signals(canfdi_app_cal_t *cal, const char *mode)
   return rc;
 }
 
-/* --responses: one 17-byte record of this step (see usage()). */
+/* --responses: one 17-byte record of this step (see usage()); the window
+ * bits against the product calibration's enabling windows (cal), whatever
+ * --test-signals made of the firmware's. */
 static int write_response(FILE *f, const canfdi_app_cal_t *cal, const canfdi_sim_trace_sp_t *sp)
 {
   uint8_t rec[17];
@@ -545,6 +548,7 @@ int main(int argc, char **argv)
   unsigned long long seed = 0ULL;
   canfdi_sim_scn_err_t err;
   canfdi_app_cal_t cal;
+  canfdi_app_cal_t product_cal;
   const canfdi_sim_in_t *in = &rig.in;
   const canfdi_sim_trace_sp_t *sp = &rig.sp;
   ecu_view_t ecu;
@@ -649,6 +653,7 @@ int main(int argc, char **argv)
     return EXIT_USAGE;
   }
   canfdi_app_default_cal(&cal);
+  product_cal = cal;
   if (apply_test_signals(&cal, test_signals) != 0) {
     fprintf(stderr, "canfdi-sil: --test-signals wants on, off or always, not '%s'\n", test_signals);
     return EXIT_USAGE;
@@ -878,7 +883,7 @@ int main(int argc, char **argv)
               canfdi_sil_msg_ecu_param_thr_prm_thr_r_decode(ecu.prm_thr.prm_thr_r), last_deg[0],
               last_deg[1], (unsigned)in->dcm.bridge, in->thr.enable ? 1U : 0U);
     }
-    if ((resp != NULL) && (write_response(resp, &cal, sp) != 0)) {
+    if ((resp != NULL) && (write_response(resp, &product_cal, sp) != 0)) {
       fprintf(stderr, "canfdi-sil: writing %s failed\n", resp_path);
       return EXIT_USAGE;
     }

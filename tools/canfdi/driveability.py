@@ -4,7 +4,7 @@
 byte order): the plant's speed (double, rad/s), the valve angle (double,
 rad) and a flag byte (bit 0/1: the DC motor's/throttle's test-signal
 scheduler ON, i.e. a burst; bit 2/3: its excitation generator gated on;
-bit 4/5: its setpoint inside the enabling window). Two runs of the same
+bit 4/5: its setpoint inside the product's enabling window). Two runs of the same
 scenario with the same seed, one with the test signals allowed
 (`--test-signals on`, the product) and one with them suppressed
 (`--test-signals off`), see the same setpoints and the same plant noise;
