@@ -63,6 +63,7 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make bench-longrun        10 fault-free simulated hours: residuals against their bands
   make bench-detection      detection delay, isolation, false alarms, smallest detected change
   make bench-envelope       every fault x mode at every envelope point: verdicts, confusion matrix
+  make bench-driveability   what the test signals cost the driver: speed/angle deviation, on-time share
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
   make bench-pil            PIL figures incl. the demo, and the RLS update vs textbook float/double/FPU

@@ -259,6 +259,20 @@ static void usage(FILE *out)
           "  -c, --channel NAME    channel name in the log (default vcan0)\n"
           "  -t, --dtcs FILE       DTC descriptions (default dbc/dtcs.csv)\n"
           "      --seed N          override the scenario's noise seed\n"
+          "      --test-signals M  the ECU's test signals (calibration, canfdi_app_cal.h):\n"
+          "                        on     the product calibration: bursts where enabled (default)\n"
+          "                        off    suppressed: excite_dcm_on = excite_thr_on = false; the\n"
+          "                               schedulers still run, nothing is added to a reference\n"
+          "                        always the former permanent dither: a burst wherever the loop\n"
+          "                               runs closed in normal degradation (windows and schedulers\n"
+          "                               widened), for comparison\n"
+          "      --responses FILE  per step one 17-byte record, host byte order: the plant's\n"
+          "                        speed (double, rad/s) and valve angle (double, rad) at the\n"
+          "                        step, then a flag byte: bit 0 / 1 DC-motor / throttle burst\n"
+          "                        on (scheduler ON), bit 2 / 3 DC-motor / throttle excitation\n"
+          "                        applied (generator gated on), bit 4 / 5 DC-motor / throttle\n"
+          "                        setpoint inside the product's enabling window\n"
+          "                        (make bench-driveability)\n"
           "      --timing          wall-clock time of canfdi_app_step: mean and max\n"
           "      --symptoms[=MS]   print the symptom vector every MS ms (default 100) on stderr\n"
           "      --sizes           print the firmware's RAM use and exit\n"
@@ -490,6 +504,71 @@ static void print_diag_symptoms(const canfdi_diagnosis_t *d)
           d->ref[CANFDI_DIAG_COMP_THR][0], d->ref[CANFDI_DIAG_COMP_THR][1]);
 }
 
+/* --test-signals: the ECU's test signals through its calibration only (no
+ * firmware logic is changed). "off" clears the switches the calibration
+ * has for it (excite_dcm_on / excite_thr_on, "the test signal may run at
+ * all"): the schedulers keep running on the same inputs, the generators
+ * keep their time-only sequence, nothing is added to a reference. Until a
+ * burst would start, an "off" run is bit-identical to an "on" run.
+ * "always": the schedulers' enabling windows span every reference, a
+ * LACK burst is due after one step and lasts for ever, no rest: the
+ * previous permanent dither wherever the loop runs closed in normal
+ * degradation. Returns 0, or -1 for an unknown mode. */
+static int apply_test_signals(canfdi_app_cal_t *cal, const char *mode)
+{
+  int rc = 0;
+  if (strcmp(mode, "on") == 0) {
+    /* the product calibration as it is */
+  } else if (strcmp(mode, "off") == 0) {
+    cal->excite_dcm_on = false;
+    cal->excite_thr_on = false;
+  } else if (strcmp(mode, "always") == 0) {
+    canfdi_testsched_cfg_t *c[2] = {&cal->test.dcm, &cal->test.thr};
+    size_t j;
+    for (j = 0U; j < 2U; j++) {
+      c[j]->lack_steps = 1U;
+      c[j]->burst_steps = UINT32_MAX;
+      c[j]->need_max_steps = UINT32_MAX;
+      c[j]->rest_steps = 0U;
+      c[j]->keyon = true;
+    }
+    cal->test.dcm_w_min_rad_s_q16 = 0;
+    cal->test.dcm_w_max_rad_s_q16 = INT32_MAX;
+    cal->test.thr_min_rad_q16 = INT32_MIN;
+    cal->test.thr_max_rad_q16 = INT32_MAX;
+    cal->excite_dcm_on = true;
+    cal->excite_thr_on = true;
+  } else {
+    rc = -1;
+  }
+  return rc;
+}
+
+/* --responses: one 17-byte record of this step (see usage()); the window
+ * bits against the product calibration's enabling windows (cal), whatever
+ * --test-signals made of the firmware's. */
+static int write_response(FILE *f, const canfdi_app_cal_t *cal, const canfdi_sim_trace_sp_t *sp)
+{
+  uint8_t rec[17];
+  const double w = sim.dcm.w_rad_s;
+  const double th = sim.thr.theta_rad;
+  const double sp_w = fabs(sp->speed_rad_s);
+  const double sp_th = sp->angle_deg * (3.14159265358979323846 / 180.0);
+  uint8_t fl = 0U;
+  fl |= (app.test.dcm.phase == CANFDI_TESTSCHED_ON) ? 0x01U : 0U;
+  fl |= (app.test.thr.phase == CANFDI_TESTSCHED_ON) ? 0x02U : 0U;
+  fl |= canfdi_excite_active(&app.excite_dcm) ? 0x04U : 0U;
+  fl |= canfdi_excite_active(&app.excite_thr) ? 0x08U : 0U;
+  fl |= ((sp_w >= (double)cal->test.dcm_w_min_rad_s_q16 / 65536.0) &&
+         (sp_w <= (double)cal->test.dcm_w_max_rad_s_q16 / 65536.0)) ? 0x10U : 0U;
+  fl |= ((sp_th >= (double)cal->test.thr_min_rad_q16 / 65536.0) &&
+         (sp_th <= (double)cal->test.thr_max_rad_q16 / 65536.0)) ? 0x20U : 0U;
+  memcpy(&rec[0], &w, 8U);
+  memcpy(&rec[8], &th, 8U);
+  rec[16] = fl;
+  return (fwrite(rec, sizeof rec, 1U, f) == 1U) ? 0 : -1;
+}
+
 int main(int argc, char **argv)
 {
   const char *scn_path = NULL;
@@ -497,6 +576,9 @@ int main(int argc, char **argv)
   const char *log_path = NULL;
   const char *dtcs_path = "dbc/dtcs.csv";
   const char *channel = "vcan0";
+  const char *test_signals = "on";
+  const char *resp_path = NULL;
+  FILE *resp = NULL;
   unsigned long decimate = 1UL;
   bool quiet = false;
   bool symptoms = false;
@@ -508,6 +590,7 @@ int main(int argc, char **argv)
   unsigned long long seed = 0ULL;
   canfdi_sim_scn_err_t err;
   canfdi_app_cal_t cal;
+  canfdi_app_cal_t product_cal;
   const canfdi_sim_in_t *in = &rig.in;
   const canfdi_sim_trace_sp_t *sp = &rig.sp;
   ecu_view_t ecu;
@@ -580,6 +663,12 @@ int main(int argc, char **argv)
         return EXIT_USAGE;
       }
       i++;
+    } else if (strcmp(a, "--test-signals") == 0) {
+      test_signals = v;
+      i++;
+    } else if (strcmp(a, "--responses") == 0) {
+      resp_path = v;
+      i++;
     } else if (strcmp(a, "--seed") == 0) {
       seed = strtoull(v, NULL, 10);
       have_seed = true;
@@ -609,6 +698,11 @@ int main(int argc, char **argv)
     return EXIT_USAGE;
   }
   canfdi_app_default_cal(&cal);
+  product_cal = cal;
+  if (apply_test_signals(&cal, test_signals) != 0) {
+    fprintf(stderr, "canfdi-sil: --test-signals wants on, off or always, not '%s'\n", test_signals);
+    return EXIT_USAGE;
+  }
   if (canfdi_app_init(&app, &cal, 0U) != CANFDI_OK) {
     fprintf(stderr, "canfdi-sil: the firmware refused its calibration\n");
     return EXIT_USAGE;
@@ -622,6 +716,13 @@ int main(int argc, char **argv)
     fprintf(out, "t_s,sp_speed,speed,sp_angle_deg,angle_deg,ua_cmd,thr_u_cmd,load,"
                  "rn_dcm1,rn_dcm2,rn_dcm3,rn_dcm4,rn_thr_corr,rn_thr_tps1,rn_thr_tps2,rn_thr_arm,"
                  "ra_est,psi_est,ra_true,thr_r_est,deg_dcm,deg_thr,bridge,thr_enable\n");
+  }
+  if (resp_path != NULL) {
+    resp = fopen(resp_path, "wb");
+    if (resp == NULL) {
+      fprintf(stderr, "canfdi-sil: cannot write %s: %s\n", resp_path, strerror(errno));
+      return EXIT_USAGE;
+    }
   }
   if (log_path != NULL) {
     log = fopen(log_path, "w");
@@ -844,6 +945,10 @@ int main(int argc, char **argv)
               canfdi_sil_msg_ecu_param_thr_prm_thr_r_decode(ecu.prm_thr.prm_thr_r), last_deg[0],
               last_deg[1], (unsigned)in->dcm.bridge, in->thr.enable ? 1U : 0U);
     }
+    if ((resp != NULL) && (write_response(resp, &product_cal, sp) != 0)) {
+      fprintf(stderr, "canfdi-sil: writing %s failed\n", resp_path);
+      return EXIT_USAGE;
+    }
     canfdi_sim_rig_end(&rig);
     /* degradation expectations are judged at their time */
     for (i = 0U; i < scn.n_expects; i++) {
@@ -989,6 +1094,9 @@ int main(int argc, char **argv)
     failures++;
   }
   if ((log != NULL) && (fclose(log) != 0)) {
+    failures++;
+  }
+  if ((resp != NULL) && (fclose(resp) != 0)) {
     failures++;
   }
   return (failures == 0) ? EXIT_SUCCESS : EXIT_CHECK;
