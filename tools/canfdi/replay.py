@@ -235,7 +235,9 @@ def _run_core(a: argparse.Namespace, report: Report, core_bin: Path, logs: list[
     total_s = 0.0
     sizes = [lg.path.stat().st_size for lg in logs]
     every = a.plot_every
-    if a.html is None:
+    if getattr(a, "samples_every", None):
+        every = a.samples_every  # canfdi-fleet: the samples for its parameter tracks, no HTML
+    elif a.html is None:
         every = 0.0
     elif every is None:
         # about 2000 samples for a log of the size's duration (~45 bytes per frame, ~4.5 frames per ms)
