@@ -12,17 +12,19 @@ Faults develop over calendar time: a fault's magnitude is
 rate x (time - onset), zero before its onset, and each drive runs with the
 magnitude of its own start time (constant through the drive). Kinds:
 
-  ra_creep          dcm_ra_up abrupt <m>: R_A +m (P1A10); threshold: the
-                    firmware's diagnosis threshold on the R_A deviation
-                    (calibration dcm_par_pos[R_A], read from the replay
-                    core's header), m >= threshold
-  spring_weak       thr_spring_weak abrupt <m>: return spring -m (P1B10);
-                    threshold: the calibration's thr_par_neg[spring]
+  ra_creep          dcm_ra_up abrupt <m>: R_A +m (P1A10)
+  spring_weak       thr_spring_weak abrupt <m>: return spring -m (P1B10)
   tps_intermittent  thr_tps1_open intermittent, dropouts of L ms every 7 s
-                    (a connector going bad, P0122); threshold: the shortest
-                    dropout the firmware qualifies, measured here with
-                    canfdi-sil on the drive template by bisection
-                    (whole milliseconds)
+                    (a connector going bad, P0122)
+
+A kind's threshold is the smallest magnitude at which this firmware sets
+the code in one drive of the drive template, measured here with
+canfdi-sil by bisection (R_A and spring to 0.005, the dropout to 1 ms).
+The firmware's calibration threshold on the estimated parameter (R_A
++8 %, spring -10 %, from the replay core's header) is written beside it:
+the estimators read R_A about 1.5 % and the spring about 3 % beyond the
+injected change, so the code comes at a smaller injected change than the
+calibration's figure.
 
 The crossing of a fault is the time its magnitude reaches the threshold, and
 its crossing drive the first drive that starts at or after it. Written
@@ -83,7 +85,7 @@ def sil_binary() -> Path:
     return SIL_REL if SIL_REL.exists() else SIL_HOST
 
 
-def thresholds() -> dict[str, float]:
+def calibration_thresholds() -> dict[str, float]:
     """The firmware's parameter thresholds as the replay core reports them (its hdr event)."""
     out = subprocess.run([str(CORE), "/dev/null"], capture_output=True, text=True, check=True).stdout
     hdr = json.loads(out.splitlines()[0])
@@ -147,27 +149,34 @@ def _codes(log: Path) -> set[str]:
     return codes
 
 
-def measure_tps_threshold(duration_s: float, tmp: Path) -> int:
-    """The shortest TPS1 dropout (whole ms) that sets P0122 on the drive template, by bisection."""
-    def sets(ms: int) -> bool:
+#: bisection grid per kind: (step, largest multiple tried)
+GRID = {"ra_creep": (0.005, 64), "spring_weak": (0.005, 64), "tps_intermittent": (1.0, 64)}
+
+
+def measure_threshold(kind: str, duration_s: float, tmp: Path) -> float:
+    """The smallest magnitude (on the kind's grid) that sets the kind's code in one drive of the
+    template (a fixed draw of it, full duration), by bisection."""
+    step, top = GRID[kind]
+    code = KINDS[kind]["code"]
+
+    def sets(k: int) -> bool:
         rng = random.Random(12345)
-        log = tmp / f"tpscal{ms}.log"
-        _run_sil(scenario(min(duration_s, 20.0), rng, fault_line("tps_intermittent", ms)), log, None, None,
-                 tmp, f"tpscal{ms}")
+        log = tmp / f"cal-{kind}-{k}.log"
+        _run_sil(scenario(duration_s, rng, fault_line(kind, k * step)), log, None, None, tmp, f"cal-{kind}-{k}")
         try:
-            return "P0122" in _codes(log)
+            return code in _codes(log)
         finally:
             log.unlink()
-    lo, hi = 1, 64  # lo does not set it, hi does
-    if sets(lo) or not sets(hi):
-        raise RuntimeError("TPS dropout threshold outside 1..64 ms")
+    lo, hi = 0, top  # lo does not set it, hi does
+    if not sets(hi):
+        raise RuntimeError(f"{kind}: no {code} even at {hi * step:g}")
     while hi - lo > 1:
         mid = (lo + hi) // 2
         if sets(mid):
             hi = mid
         else:
             lo = mid
-    return hi
+    return round(hi * step, 6)
 
 
 def plan_fleet(n_vehicles: int, n_drives: int, seed: int, duration_s: float,
@@ -272,8 +281,10 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     tmp_root = Path(tempfile.mkdtemp(prefix="canfdi-fleet-gen-"))
     try:
-        thr = thresholds()
-        thr["tps_intermittent"] = float(measure_tps_threshold(a.duration, tmp_root))
+        cal = calibration_thresholds()
+        with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+            futs = {k: ex.submit(measure_threshold, k, a.duration, tmp_root) for k in KINDS}
+            thr = {k: f.result() for k, f in futs.items()}
         vehicles = plan_fleet(a.vehicles, a.drives, a.seed, a.duration, thr)
         done = 0
         with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
@@ -295,11 +306,12 @@ def main(argv: list[str] | None = None) -> int:
         "schema": "canfdi-fleet-truth/1", "seed": a.seed, "vehicles_n": a.vehicles, "drives_n": a.drives,
         "drive_duration_s": a.duration,
         "thresholds": {k: {"value": thr[k], "unit": KINDS[k]["unit"], "parameter": KINDS[k]["parameter"],
-                           "defined_by": ("the firmware's diagnosis threshold on the parameter deviation "
-                                          "(canfdi_app_default_cal, as the replay core's hdr reports it)"
-                                          if KINDS[k]["hdr"] else
-                                          "the shortest TPS1 dropout that sets P0122 on the drive template, "
-                                          "measured with canfdi-sil by bisection")}
+                           "defined_by": "the smallest magnitude that sets the code in one drive of the drive "
+                                         "template, measured with canfdi-sil by bisection",
+                           "calibration_threshold": cal.get(k),
+                           "calibration_defined_by": ("the firmware's diagnosis threshold on the estimated "
+                                                      "parameter's relative deviation (canfdi_app_default_cal, "
+                                                      "the replay core's hdr)") if k in cal else None}
                        for k in KINDS},
         "vehicles": [{"vehicle": v["vehicle"], "faults": v["faults"],
                       "drives": [{k: d[k] for k in ("index", "start", "file", "duration_s")} for d in v["drives"]]}
