@@ -157,6 +157,14 @@ def process_log(job: dict[str, Any], prev: dict[str, Any] | None) -> dict[str, A
     if rc != 0 or lg is None or not tmp_nvm.exists():
         return _failed(base, job, nvm_in, nvm_path, res_path, msgs or f"the replay failed (exit {rc})",
                        fw, dbc_sha, log_sha, t0, key)
+    if not lg.eof.get("frames"):
+        # nothing could be read from the file: for a fleet, an unusable file (canfdi-replay says
+        # "nothing judged"); the memory is not touched, as for any failed file
+        tmp_nvm.unlink()
+        why = f"no CAN frame could be read from the log (format {lg.fmt}"
+        why += f", {lg.input_problem_count} input problem(s))" if lg.input_problem_count else ")"
+        return _failed(base, job, nvm_in, nvm_path, res_path, why + (f": {msgs}" if msgs else ""),
+                       fw, dbc_sha, log_sha, t0, key)
     os.replace(tmp_nvm, nvm_path)
     common = _common(job, log_sha, fw, dbc_sha)
     start: dt.datetime | None = common["start"]
