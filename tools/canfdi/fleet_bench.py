@@ -26,6 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     for workers in (1, 2):
         out = out_json.parent / f"fleet_bench_w{workers}"
         shutil.rmtree(out, ignore_errors=True)
+        load0 = os.getloadavg()[0]
         t0 = time.perf_counter()
         r = subprocess.run([sys.executable, "-m", "canfdi.fleet", "-q", str(fleet / "manifest.csv"), "-o", str(out),
                             "--workers", str(workers), "--force"], capture_output=True, text=True)
@@ -36,7 +37,8 @@ def main(argv: list[str] | None = None) -> int:
                      "operating_h": round(run["operating_h"], 4),
                      "operating_h_per_wall_s": round(run["operating_h"] / wall, 4),
                      "realtime_factor": round(run["operating_h"] * 3600.0 / wall, 1),
-                     "logs_per_s": round(run["logs"] / wall, 2)})
+                     "logs_per_s": round(run["logs"] / wall, 2),
+                     "load_avg_1min_before_after": [round(load0, 2), round(os.getloadavg()[0], 2)]})
         print(f"bench-fleet: {workers} worker(s): {run['logs']} logs, {run['operating_h']:.2f} operating h in "
               f"{wall:.1f} s wall: {runs[-1]['operating_h_per_wall_s']:.3f} h per s "
               f"({runs[-1]['realtime_factor']:.0f}x real time)")
