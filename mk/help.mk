@@ -21,6 +21,7 @@ Demonstrations
   make demo-sil             the demo in one process (SIL), without vcan
   make demo-signal          the signal-based detectors alone on a synthetic signal
   make hil                  the HIL demo: canfdi-ecu + canfdi-sim in lockstep on vcan0
+  make demo-fleet           a small synthetic fleet through canfdi-fleet: Parquet and the HTML fleet report
 
 Tests (`make test` runs those marked *)
   make test                 everything CI checks (about 12 min from a fresh clone on 2 cores)
@@ -54,6 +55,8 @@ Tests (`make test` runs those marked *)
   make vcan-test          * the vcan sandbox's self-test (tools/vcan-run)
   make hil-test           * the HIL tests inside the sandbox (tests/hil, vcan tests of tests/sim)
   make replay-test        * canfdi-replay on SIL and HIL recordings, every log format, bad input (tests/replay)
+  make fleet-test         * canfdi-fleet on a small synthetic fleet: Dask, rerun, failed files, carried memory, Parquet
+  make fleet-acceptance     a 20 x 10 synthetic fleet against its truth (FLEET_SEED=1): detection drive, false codes, RUL, memory
 
 Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figure)
   make bench                all of the following
@@ -69,6 +72,7 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make bench-pil            PIL figures incl. the demo, and the RLS update vs textbook float/double/FPU
   make bench-replay         canfdi-replay on a one-hour log against python-can reading/decoding it
   make bench-replay-settle  the settling time of a mid-drive log: SIL recordings cut and replayed
+  make bench-fleet          canfdi-fleet on the 20 x 10 fleet with 1 and 2 local workers: operating hours per wall second
 
 Drive profiles (docs/driving.md)
   make drive-profiles       the WLTC class 3 drive profiles, $(BUILD)/drive/*.csv (+ .json summaries)

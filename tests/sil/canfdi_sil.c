@@ -276,6 +276,9 @@ static void usage(FILE *out)
           "      --timing          wall-clock time of canfdi_app_step: mean and max\n"
           "      --symptoms[=MS]   print the symptom vector every MS ms (default 100) on stderr\n"
           "      --sizes           print the firmware's RAM use and exit\n"
+          "      --nvm-in FILE     power up with the DTC memory image in FILE (the bytes\n"
+          "                        --nvm-out wrote: the previous drive's memory)\n"
+          "      --nvm-out FILE    at the end, power down and write the DTC memory image\n"
           "  -q, --quiet           only the verdict lines\n"
           "  -h, --help            this text\n"
           "\n"
@@ -588,6 +591,8 @@ int main(int argc, char **argv)
   double step_ns_max = 0.0;
   bool have_seed = false;
   unsigned long long seed = 0ULL;
+  const char *nvm_in = NULL;
+  const char *nvm_out = NULL;
   canfdi_sim_scn_err_t err;
   canfdi_app_cal_t cal;
   canfdi_app_cal_t product_cal;
@@ -673,6 +678,12 @@ int main(int argc, char **argv)
       seed = strtoull(v, NULL, 10);
       have_seed = true;
       i++;
+    } else if (strcmp(a, "--nvm-in") == 0) {
+      nvm_in = v;
+      i++;
+    } else if (strcmp(a, "--nvm-out") == 0) {
+      nvm_out = v;
+      i++;
     } else {
       fprintf(stderr, "canfdi-sil: unknown option '%s'\nTry 'canfdi-sil --help'.\n", a);
       return EXIT_USAGE;
@@ -703,7 +714,29 @@ int main(int argc, char **argv)
     fprintf(stderr, "canfdi-sil: --test-signals wants on, off or always, not '%s'\n", test_signals);
     return EXIT_USAGE;
   }
-  if (canfdi_app_init(&app, &cal, 0U) != CANFDI_OK) {
+  if (nvm_in != NULL) {
+    /* a cold start with the memory the previous drive stored (a vehicle's
+     * next drive); the image is the bytes of canfdi_app_power_down */
+    static uint8_t img_in[CANFDI_APP_IMAGE_MAX_BYTES];
+    FILE *f = fopen(nvm_in, "rb");
+    size_t n_in;
+    int32_t up;
+    if (f == NULL) {
+      fprintf(stderr, "canfdi-sil: cannot read %s: %s\n", nvm_in, strerror(errno));
+      return EXIT_USAGE;
+    }
+    n_in = fread(img_in, 1U, sizeof img_in, f);
+    (void)fclose(f);
+    up = canfdi_app_power_up(&app, &cal, 0U, img_in, (uint32_t)n_in);
+    if (up == CANFDI_APP_IMAGE_REJECTED) {
+      fprintf(stderr, "canfdi-sil: %s: the DTC memory image was rejected\n", nvm_in);
+      return EXIT_USAGE;
+    }
+    if (up != CANFDI_OK) {
+      fprintf(stderr, "canfdi-sil: the firmware refused its calibration\n");
+      return EXIT_USAGE;
+    }
+  } else if (canfdi_app_init(&app, &cal, 0U) != CANFDI_OK) {
     fprintf(stderr, "canfdi-sil: the firmware refused its calibration\n");
     return EXIT_USAGE;
   }
@@ -1098,6 +1131,17 @@ int main(int argc, char **argv)
   }
   if ((resp != NULL) && (fclose(resp) != 0)) {
     failures++;
+  }
+  if (nvm_out != NULL) {
+    /* ignition off: the operation cycle ends, the memory's image is stored */
+    static uint8_t img_out[CANFDI_APP_IMAGE_MAX_BYTES];
+    const int32_t n_out = canfdi_app_power_down(&app, img_out, (uint32_t)sizeof img_out);
+    FILE *f = fopen(nvm_out, "wb");
+    if ((n_out <= 0) || (f == NULL) || (fwrite(img_out, 1U, (size_t)n_out, f) != (size_t)n_out) ||
+        (fclose(f) != 0)) {
+      fprintf(stderr, "canfdi-sil: cannot write the DTC memory image to %s\n", nvm_out);
+      return EXIT_USAGE;
+    }
   }
   return (failures == 0) ? EXIT_SUCCESS : EXIT_CHECK;
 }

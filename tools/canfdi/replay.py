@@ -9,7 +9,8 @@ status, degradation, confidence, description), what could not be judged
 and why, the log's data quality, and optionally a JSON and an HTML report.
 
 Several logs are consecutive drives of one vehicle: the trouble-code
-memory is carried across, as through the ECU's NVM.
+memory is carried across, as through the ECU's NVM. --nvm-in/--nvm-out
+carry it across separate runs (one run per drive: canfdi-fleet).
 """
 from __future__ import annotations
 
@@ -42,6 +43,7 @@ examples:
   canfdi-replay day1.asc day2.asc               # two drives, the code memory carried across
   canfdi-replay --map vehicle.map vehicle.mf4   # another bus's frames mapped onto the inputs
   canfdi-replay -c can1 --start mid-drive cut.log
+  canfdi-replay --nvm-out d1.nvm day1.asc; canfdi-replay --nvm-in d1.nvm day2.asc   # = day1.asc day2.asc
 
 time base: a step of the supervisor every 1 ms of log time, the frames
 stamped at or before a step's time going in before it; a lockstep HIL
@@ -114,6 +116,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "--map at least three periods of the slowest mapped message)")
     t.add_argument("--clock", choices=("auto", "timestamps", "simstep"), default="auto",
                    help="time base (default auto: SimStep frames if the log has them, else time stamps)")
+    m = p.add_argument_group("trouble-code memory (the ECU's NVM image)")
+    m.add_argument("--nvm-in", metavar="FILE", type=Path,
+                   help="power up with the DTC memory image in FILE (written by --nvm-out after the previous "
+                        "drive) instead of a cleared memory")
+    m.add_argument("--nvm-out", metavar="FILE", type=Path,
+                   help="after the last log, power down (the operation cycle ends) and write the DTC memory "
+                        "image to FILE: the next run's --nvm-in")
     o = p.add_argument_group("output")
     o.add_argument("-q", "--quiet", action="store_true", help="only the findings and the result line")
     o.add_argument("--no-progress", action="store_true", help="no progress bar (it is off anyway when "
@@ -226,7 +235,9 @@ def _run_core(a: argparse.Namespace, report: Report, core_bin: Path, logs: list[
     total_s = 0.0
     sizes = [lg.path.stat().st_size for lg in logs]
     every = a.plot_every
-    if a.html is None:
+    if getattr(a, "samples_every", None):
+        every = a.samples_every  # canfdi-fleet: the samples for its parameter tracks, no HTML
+    elif a.html is None:
         every = 0.0
     elif every is None:
         # about 2000 samples for a log of the size's duration (~45 bytes per frame, ~4.5 frames per ms)
@@ -241,6 +252,10 @@ def _run_core(a: argparse.Namespace, report: Report, core_bin: Path, logs: list[
         cmd += ["--settle-ms", str(round(a.settle * 1000))]
     if a.channel:
         cmd += ["--channel", a.channel]
+    if getattr(a, "nvm_in", None) is not None:
+        cmd += ["--nvm-in", str(a.nvm_in)]
+    if getattr(a, "nvm_out", None) is not None:
+        cmd += ["--nvm-out", str(a.nvm_out)]
     if mapper is not None:
         cmd += mapper.core_args()
     cmd += [lg.core_path for lg in logs]

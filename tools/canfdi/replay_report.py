@@ -261,7 +261,7 @@ class Report:
         if kind == "end":
             self.end = e
             return
-        if kind == "power_cycle":
+        if kind in ("power_cycle", "nvm_in"):
             self.power_cycles.append(e)
             return
         if kind == "why":

@@ -12,7 +12,12 @@
  * arrives: python-can converts it to candump text in a pipe. Several files
  * are consecutive recordings of one vehicle: between two files the
  * supervisor is powered down and up again with its trouble-code memory
- * (the NVM image), as an ECU is between two drives.
+ * (the NVM image), as an ECU is between two drives. --nvm-in and --nvm-out
+ * carry that image across separate runs (one run per drive, e.g. the fleet
+ * replay canfdi-fleet): the first log starts with a power-up from the image
+ * read, and after the last log the supervisor is powered down and the image
+ * written, so a chain of runs holds the same memory as one run over all the
+ * logs.
  *
  * Time base (per file, decided from the first frames, --clock):
  *   simstep     the log has SimStep frames (a lockstep HIL recording): as
@@ -110,6 +115,8 @@ typedef struct {
   const char *no_models_why;
   bool progress;
   uint32_t rx_rate_ms[CANFDI_RX_F_COUNT]; /* 0: the DBC's cycle time */
+  const char *nvm_in;      /* DTC memory image to power up with; NULL: cleared memory */
+  const char *nvm_out;     /* where the image goes at the end; NULL: nowhere */
 } opts_t;
 
 /* ------------------------------------------------------------ events */
@@ -252,7 +259,7 @@ typedef struct {
   /* the supervisor */
   canfdi_app_t app;
   canfdi_app_cal_t cal;
-  uint8_t image[CANFDI_DTC_IMAGE_MAX_BYTES];
+  uint8_t image[CANFDI_APP_IMAGE_MAX_BYTES];
   int32_t image_len;
   /* file */
   int file_index;
@@ -1710,6 +1717,10 @@ static void usage(FILE *out)
           "                           SetpointThr) comes every MS ms (mapped inputs): its\n"
           "                           timeout is the calibration's count of missed cycles\n"
           "                           at that period (at most 255 of the DBC's cycles)\n"
+          "      --nvm-in FILE        power up with the DTC memory image in FILE (what\n"
+          "                           --nvm-out wrote after the previous drive)\n"
+          "      --nvm-out FILE       after the last log: power down (the operation cycle\n"
+          "                           ends) and write the DTC memory image to FILE\n"
           "      --progress           progress events (bytes read) every 8 MB\n"
           "      --fw-id              print the firmware id and exit\n"
           "  -h, --help               this text\n"
@@ -1819,6 +1830,10 @@ static int parse_args(int argc, char **argv, int *first_file)
       }
     } else if (strcmp(a, "--no-models-why") == 0) {
       opt.no_models_why = v;
+    } else if (strcmp(a, "--nvm-in") == 0) {
+      opt.nvm_in = v;
+    } else if (strcmp(a, "--nvm-out") == 0) {
+      opt.nvm_out = v;
     } else if (strcmp(a, "--rx-rate") == 0) {
       const char *eq = strchr(v, '=');
       unsigned f;
@@ -1906,7 +1921,24 @@ int main(int argc, char **argv)
   }
   for (i = first; i < argc; i++) {
     int32_t rc;
-    if (i == first) {
+    if ((i == first) && (opt.nvm_in != NULL)) {
+      /* the previous drive's memory, stored by a run with --nvm-out */
+      FILE *nf = fopen(opt.nvm_in, "rb");
+      size_t n;
+      if (nf == NULL) {
+        fprintf(stderr, PROG ": cannot read %s: %s\n", opt.nvm_in, strerror(errno));
+        return EXIT_USAGE;
+      }
+      n = fread(rp.image, 1U, sizeof rp.image, nf);
+      (void)fclose(nf);
+      rp.image_len = (int32_t)n;
+      rc = canfdi_app_power_up(&rp.app, &rp.cal, 0U, rp.image, (uint32_t)n);
+      fprintf(ev, "{\"ev\":\"nvm_in\",\"file\":0,\"image_bytes\":%d,\"rc\":%d}\n", (int)n, (int)rc);
+      if (rc == CANFDI_APP_IMAGE_REJECTED) {
+        fprintf(stderr, PROG ": %s: the DTC memory image was rejected\n", opt.nvm_in);
+        return EXIT_USAGE;
+      }
+    } else if (i == first) {
       rc = canfdi_app_init(&rp.app, &rp.cal, 0U);
     } else {
       /* the next drive: power-down with the memory's image, power-up with it */
@@ -1931,6 +1963,18 @@ int main(int argc, char **argv)
     const canfdi_app_diag_t *d = canfdi_app_diag(&rp.app);
     fprintf(ev, "{\"ev\":\"end\",\"steps\":%lu,\"frames_rejected\":%lu,\"frames_unknown\":%lu}\n",
             (unsigned long)d->steps, (unsigned long)d->frames_rejected, (unsigned long)d->frames_unknown);
+  }
+  if (opt.nvm_out != NULL) {
+    /* ignition off after the last drive: the image the next run starts from */
+    FILE *nf;
+    rp.image_len = canfdi_app_power_down(&rp.app, rp.image, (uint32_t)sizeof rp.image);
+    nf = (rp.image_len > 0) ? fopen(opt.nvm_out, "wb") : NULL;
+    if ((nf == NULL) || (fwrite(rp.image, 1U, (size_t)rp.image_len, nf) != (size_t)rp.image_len) ||
+        (fclose(nf) != 0)) {
+      fprintf(stderr, PROG ": cannot write the DTC memory image to %s\n", opt.nvm_out);
+      fflush(ev);
+      return EXIT_USAGE;
+    }
   }
   if (fflush(ev) != 0) {
     fprintf(stderr, PROG ": writing the events failed: %s\n", strerror(errno));
