@@ -39,6 +39,7 @@ int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg
     m->jump_hold = 0U;
     m->jump = false;
     m->r1_mean_q32 = 0;
+    m->e4_mean_q32 = 0;
     rc = CANFDI_OK;
   }
   return rc;
@@ -201,6 +202,9 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   int32_t r1_hp = 0;
   int32_t d_mech = 0; /* dPsi explaining r2..r4, Q28 V s */
   int32_t d_r1 = 0;   /* dPsi explaining r1's newer part */
+  int32_t d_tot = 0;  /* dPsi explaining r1 as it is (the whole flux loss) */
+  int32_t e4 = 0;     /* r4's signed sensitivity times Psi, V */
+  int32_t e4_hp = 0;  /* e4 minus its own mean over the load tracking, V */
   bool any = false;
   bool ok = (pd != NULL) && in->dcm_in_ok && (psi > 0);
   uint32_t j;
@@ -219,7 +223,13 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   }
   if (ok) {
     const int32_t ri = canfdi_mul_s32_qn(pd->ra_hat_ohm_q24 / 256, in->dcm_i_A_q16, 16U);
-    const int32_t e4 = canfdi_sub_s32_sat(ri, canfdi_mul_s32_qn(psi, in->dcm_w_rad_s_q16, 16U));
+    const canfdi_q31_t a = canfdi_parity_dcm_load_alpha_q31(in->parity_dcm);
+    e4 = canfdi_sub_s32_sat(ri, canfdi_mul_s32_qn(psi, in->dcm_w_rad_s_q16, 16U));
+    if (a != 0) {
+      const int64_t d = canfdi_sub_s64_sat((int64_t)e4 * 65536, m->e4_mean_q32);
+      m->e4_mean_q32 = canfdi_add_s64_sat(m->e4_mean_q32, canfdi_mul_s64_q31(d, a));
+      e4_hp = canfdi_sub_s32_sat(e4, canfdi_sat_s64_to_s32(canfdi_asr64_rnd(m->e4_mean_q32, 16U)));
+    }
     sens[0] = canfdi_q31_abs(in->dcm_w_rad_s_q16);
     sens[1] = canfdi_q31_abs(in->dcm_i_A_q16);
     sens[2] = sens[1];
@@ -235,6 +245,7 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
           ok = false; /* no flux loss gives this residual */
         } else if (j == 0U) {
           d_r1 = canfdi_div_s32_qn(canfdi_q31_abs(r1_hp), sens[0], 28U);
+          d_tot = canfdi_div_s32_qn(canfdi_q31_abs(pd->r_q16[0]), sens[0], 28U);
         } else {
           const int32_t dj = canfdi_div_s32_qn(canfdi_q31_abs(pd->r_q16[j]), sens[j], 28U);
           d_mech = (dj > d_mech) ? dj : d_mech;
@@ -245,7 +256,15 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   if (ok && any) {
     const int32_t d_all = (d_r1 > d_mech) ? d_r1 : d_mech;
     for (j = 0U; j < CANFDI_SYM_N_RES; j++) {
-      const int32_t res = canfdi_mul_s32_qn((j == 0U) ? d_mech : d_all, sens[j], 28U);
+      int32_t res = canfdi_mul_s32_qn((j == 0U) ? d_mech : d_all, sens[j], 28U);
+      if (j == 3U) {
+        /* r4 high-passed: the newer part of the loss times its
+         * sensitivity, plus the whole loss times the sensitivity's own
+         * change over the tracking time (signed, e4's sign positive) */
+        const int32_t dt = (d_tot > d_all) ? d_tot : d_all;
+        const int32_t chg = canfdi_mul_s32_qn(dt, canfdi_div_s32_qn(e4_hp, psi, 16U), 28U);
+        res = canfdi_q31_abs(canfdi_add_s32_sat(res, (sg[3] < 0) ? canfdi_sub_s32_sat(0, chg) : chg));
+      }
       s->dcm_fx_q16[j] = (pd->thr_q16[j] > 0) ? canfdi_div_s32_qn(res, pd->thr_q16[j], 16U) : INT32_MAX;
     }
     s->flags |= CANFDI_SYM_F_DCM_FX_VALID;

@@ -51,7 +51,11 @@
  * drift slower than that time constant, which r2..r4 cannot show, does
  * not make their zeros count against a flux loss. r2..r4 enter the
  * prediction of r1 as they are (already high-passed: an underestimate of
- * dPsi, so a smaller prediction, on the cautious side). A residual beyond
+ * dPsi, so a smaller prediction, on the cautious side). r4's prediction
+ * adds the whole loss (|r1| / |w|, at least dPsi) times the change of its
+ * signed sensitivity over the load tracking time ((e4 - mean e4) / Psi,
+ * e4 = R_A I_A - Psi w): where the speed moves towards Psi w = R_A I_A,
+ * r4 loses what its tracked mean had absorbed. A residual beyond
  * its threshold with the sign opposite to a flux loss's, or one whose
  * sensitivity is 0, leaves the prediction not valid (no flux loss
  * explains it). Scaling: dPsi in Q28 V s (saturating at 8 V s), products
@@ -67,7 +71,7 @@
  * (saturating), differences by saturating subtraction. Cost: 8 saturating
  * divisions, 2 multiplications and ~50 compares per step, plus for the
  * flux-loss prediction up to 9 divisions and 8 multiplications while a
- * residual is beyond its threshold. Memory: 56 bytes of state and
+ * residual is beyond its threshold. Memory: 64 bytes of state and
  * configuration; no heap.
  */
 #ifndef CANFDI_APP_SYM_H
@@ -113,6 +117,7 @@ typedef struct {
   uint16_t jump_hold;           /* steps the jump flag is held at least */
   bool jump;                    /* the jump flag */
   int64_t r1_mean_q32;          /* r1's mean over the parity's load_tau (V, Q32) */
+  int64_t e4_mean_q32;          /* R_A I_A - Psi w, its mean over load_tau (V, Q32) */
 } canfdi_app_sym_t;
 
 typedef struct {

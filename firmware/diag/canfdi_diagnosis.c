@@ -18,6 +18,10 @@ CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_FLAGS <= 16U, flags_fit_uint16);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_COMP_THR < CANFDI_DIAG_N_COMP, components_fit);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_RULES <= 32U, rules_fit_the_gate_mask);
 
+/* Most steps a low flux-loss prediction adds to a residual's hold (the
+ * parity's load tracking time, 1 s). */
+#define FX_LOW_MAX 1000U
+
 /* Test verdicts while combining a hard and a model rule of one fault. */
 #define V_NA 0U   /* no such test */
 #define V_NONE 1U /* not tested */
@@ -153,6 +157,7 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
     }
     for (j = 0U; j < CANFDI_SYM_N_RES; j++) {
       d->fx_blind[j] = 0U;
+      d->fx_low[j] = 0U;
     }
     d->corr_not_isolated = false;
     d->failed_mask = 0U;
@@ -427,11 +432,18 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
      * stays none until the prediction held above it for sym_on_steps
      * (as long as a flux loss would need to make it a symptom) */
     if (((s->flags & CANFDI_SYM_F_DCM_FX_VALID) != 0U) && (s->dcm_fx_q16[i] < d->cfg.off_q16)) {
-      d->fx_blind[i] = d->cfg.sym_on_steps;
-    } else if (d->fx_blind[i] > 0U) {
+      /* the longer the prediction has been low (since it last held
+       * above the zero level for the whole hold), the longer the
+       * residual needs to follow it out of its own tracked mean */
+      if (d->fx_low[i] < FX_LOW_MAX) {
+        d->fx_low[i]++;
+      }
+      d->fx_blind[i] = (uint16_t)(d->cfg.sym_on_steps + d->fx_low[i]);
+    } else if (d->fx_blind[i] > 1U) {
       d->fx_blind[i]--;
     } else {
-      /* seen */
+      d->fx_blind[i] = 0U; /* seen */
+      d->fx_low[i] = 0U;
     }
   }
   channel(d, CANFDI_DIAG_COMP_THR, 8U, 0, false);

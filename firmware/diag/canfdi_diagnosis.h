@@ -118,7 +118,11 @@
  *    (an I_A offset's). A residual's zero is evidence against a flux loss
  *    only while the flux loss that explains the residuals beyond their
  *    thresholds would have put it at `off` or above for sym_on_steps (as
- *    long as that flux loss would need to make it a symptom; fx_blind). For the gated rules (every
+ *    long as that flux loss would need to make it a symptom, plus as many
+ *    steps as the prediction had been below `off` since it last held above
+ *    it that long, at most 1000 (1 s, the load tracking: the residual has
+ *    to follow the flux loss out of its own tracked mean; fx_blind,
+ *    fx_low). For the gated rules (every
  *    DC-motor rule except flux's own and those that require a symptom on a
  *    channel the flux rule expects at zero: R_A up through the R_A
  *    estimate, U_A offset through UAC) such zeros do not count (neither
@@ -170,7 +174,7 @@
  * cycles; ~0.15 ms at 48 MHz for 7 k.) Code: 3.7 kB (M0+), 3.5 kB (M4),
  * ROM tables included. Stack (-fstack-usage, M0+): step 176 bytes plus a
  * 40-byte callee.
- * Memory: sizeof(canfdi_diagnosis_t) = 672 bytes on a 32-bit target
+ * Memory: sizeof(canfdi_diagnosis_t) = 680 bytes on a 32-bit target
  * (configuration copy 92, reciprocals 68, channel and flag persistence 180,
  * normalised values 80, compiled rules 140, weights 40, results 16,
  * diagnostics 20, state). No heap, no globals besides const tables, no
@@ -302,9 +306,11 @@ typedef struct {
   uint16_t obs_zero;
   uint16_t obs_zero_fx; /* obs_zero without the residual zeros a flux loss
                          * would not have disturbed (flux-gated rules) */
+  uint16_t fx_low[CANFDI_SYM_N_RES];   /* DC motor: steps the prediction was
+                                        * low since it last held above off */
   uint16_t fx_blind[CANFDI_SYM_N_RES]; /* DC motor: steps a residual's zero
                                         * stays no evidence against a flux
-                                        * loss, <= sym_on_steps */
+                                        * loss, <= sym_on_steps + 1000 */
   uint32_t fx_gated; /* bit i: model rule i is flux-gated */
   uint8_t flux_rule; /* index of the flux rule (CANFDI_DIAG_N_RULES: none) */
   int8_t ref[CANFDI_DIAG_N_COMP][2]; /* operating-point signs of this step */
