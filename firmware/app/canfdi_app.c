@@ -290,12 +290,10 @@ static void stage_detect(canfdi_app_t *app)
   (void)canfdi_actmon_step(&app->actmon, &ai, &app->actmon_out);
 }
 
-/* Stages 5-7: the symptom vector, the diagnosis and the trouble codes. */
+/* Stage 5: the symptom vector every step (its filters run at 1 ms). */
 static void stage_diagnose(canfdi_app_t *app)
 {
   canfdi_app_sym_in_t si;
-  canfdi_dtcroute_in_t ri;
-  canfdi_dtc_ff_t ff;
   si.parity_dcm = &app->parity_dcm;
   si.parity_thr = &app->parity_thr;
   si.dcm_in_ok = app->dcm.in_ok;
@@ -318,7 +316,15 @@ static void stage_diagnose(canfdi_app_t *app)
   si.mgr_detected = app->fb.mgr.detected;
   si.actmon = &app->actmon_out;
   canfdi_app_sym_build(&app->sym_state, &si, &app->sym);
-  canfdi_diagnosis_step(&app->diagnosis, &app->sym, app->report);
+}
+
+/* Stage 7, every step: the trouble codes from the diagnosis' verdicts of
+ * its last run, the manager's findings and the communication monitors of
+ * this step (events of one step: a frame rejected, a timeout). */
+static void stage_dtc(canfdi_app_t *app)
+{
+  canfdi_dtcroute_in_t ri;
+  canfdi_dtc_ff_t ff;
   ff.time_ms = canfdi_uptime_ms(&app->uptime);
   ff.omega_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_OMEGA);
   ff.ia_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_IA);
@@ -443,12 +449,22 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     stage_vote(app);                   /* 2. */
     stage_control(app, &u_dcm, &u_thr); /* 3. */
     stage_detect(app);                 /* 4. */
-    stage_diagnose(app);               /* 5.-7. */
+    stage_diagnose(app);               /* 5. */
+    if (app->slot == CANFDI_APP_SLOT_DIAG) {
+      /* 6. in its slot of the rate schedule (canfdi_app.h); between its
+       * runs its verdicts hold */
+      canfdi_diagnosis_step(&app->diagnosis, &app->sym, app->report);
+    }
+    stage_dtc(app);                    /* 7. */
     stage_manage(app, u_dcm, u_thr);   /* 8. */
     update_feedback(app);
     rc = stage_outputs(app, out);      /* 9. */
     rc = canfdi_app_uds_stage(app, out, rc); /* 10. the diagnostic server */
     canfdi_count_inc(&app->diag.steps);
+    app->slot = (uint8_t)(app->slot + 1U);
+    if (app->slot >= app->cal.diag_period_steps) {
+      app->slot = 0U;
+    }
     app->applied_set = false; /* set_applied acts on one step */
     app->running = true;
   }

@@ -111,5 +111,8 @@ void canfdi_app_default_cal(canfdi_app_cal_t *cal)
     canfdi_actmgr_default_cfg(&cal->actmgr);
     canfdi_diagnosis_default_cfg(&cal->diagnosis);
     canfdi_dtcroute_default_cfg(&cal->dtcroute);
+    /* the diagnosis every step until its throttle parameter isolation holds
+     * at 10 ms (canfdi_app.h, the rate schedule) */
+    cal->diag_period_steps = 1U;
   }
 }

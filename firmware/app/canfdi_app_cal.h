@@ -59,6 +59,10 @@ typedef struct {
   canfdi_actmgr_cfg_t actmgr;
   canfdi_diagnosis_cfg_t diagnosis;
   canfdi_dtcroute_cfg_t dtcroute;
+  uint8_t diag_period_steps;       /* the rate schedule (canfdi_app.h): the
+                                    * diagnosis runs every diag_period_steps
+                                    * 1 ms steps, 1..10; its step counts stay
+                                    * given in 1 ms steps (converted at init) */
   canfdi_uds_cfg_t uds;            /* the diagnostic server (limp-home angle from ctrl_thr) */
   int32_t load_nom_Nm_q16;         /* load the models assume while the vehicle's
                                     * load feed-forward (SetpointDcm.SpDcmLoad) is

@@ -12,11 +12,32 @@
  */
 #include "app/canfdi_app.h"
 
+/* A count of 1 ms steps as a count of calls every period steps (rounded
+ * up, at least 1): the persistence the diagnosis and the DTC bookkeeping
+ * were calibrated for, at their scheduled rate. */
+static uint16_t per_period(uint16_t steps, uint8_t period)
+{
+  const uint32_t n = ((uint32_t)steps + (uint32_t)period - 1U) / (uint32_t)period;
+  return (uint16_t)((n < 1U) ? 1U : n);
+}
+
 static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
 {
   canfdi_app_cal_t *c = &app->cal;
+  canfdi_diagnosis_cfg_t dc = c->diagnosis;
+  const uint8_t period = c->diag_period_steps;
   int32_t rc = CANFDI_OK;
-  if ((canfdi_rx_init(&app->rx, &c->rx, now_us) != CANFDI_OK) || (canfdi_tx_init(&app->tx) != CANFDI_OK) ||
+  if ((period < 1U) || (period > CANFDI_APP_FRAME_SLOTS)) {
+    rc = -CANFDI_EINVAL;
+  } else {
+    dc.sym_on_steps = per_period(dc.sym_on_steps, period);
+    dc.sym_off_steps = per_period(dc.sym_off_steps, period);
+    dc.flag_on_steps = per_period(dc.flag_on_steps, period);
+    dc.flag_off_steps = per_period(dc.flag_off_steps, period);
+    dc.isolate_steps = per_period(dc.isolate_steps, period);
+  }
+  app->slot = 0U;
+  if ((rc == CANFDI_OK) && ((canfdi_rx_init(&app->rx, &c->rx, now_us) != CANFDI_OK) || (canfdi_tx_init(&app->tx) != CANFDI_OK) ||
       (canfdi_ctrl_dcm_init(&app->ctrl_dcm, &c->ctrl_dcm) != CANFDI_OK) ||
       (canfdi_ctrl_thr_init(&app->ctrl_thr, &c->ctrl_thr) != CANFDI_OK) ||
       (canfdi_excite_init(&app->excite_dcm, &c->excite_dcm) != CANFDI_OK) ||
@@ -32,11 +53,11 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
       (canfdi_actmon_init(&app->actmon, &c->actmon) != CANFDI_OK) ||
       (canfdi_app_sym_init(&app->sym_state, &c->sym) != CANFDI_OK) ||
       (canfdi_actmgr_init(&app->actmgr, &c->actmgr) != CANFDI_OK) ||
-      (canfdi_diagnosis_init(&app->diagnosis, &c->diagnosis) != CANFDI_OK) ||
+      (canfdi_diagnosis_init(&app->diagnosis, &dc) != CANFDI_OK) ||
       (canfdi_dtc_init(&app->dtc, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT) != CANFDI_OK) ||
       (canfdi_dtcroute_init(&app->dtcroute, &c->dtcroute, &app->dtc) != CANFDI_OK) ||
       (canfdi_uds_init(&app->uds, &c->uds, 0U, now_us) != CANFDI_OK) ||
-      (canfdi_dtc_cycle_start(&app->dtc) != CANFDI_OK)) {
+      (canfdi_dtc_cycle_start(&app->dtc) != CANFDI_OK))) {
     rc = -CANFDI_EINVAL;
   }
   return rc;
