@@ -35,9 +35,9 @@
  *     (a burst stopped by the enabling conditions keeps its share).
  *   - Until it has had them, a need starts a NEED burst at the first
  *     enabled step at least gap_steps after the end of the last burst (or
- *     after the rest, if that is shorter): the
- *     rest after a KEYON, LEARN or LACK burst does not hold it back (a
- *     fault that appears just after key-on is tested at once).
+ *     after the rest, if that is shorter): the rest after a KEYON, LEARN
+ *     or LACK burst does not hold it back (a fault that appears just after
+ *     key-on is tested at once).
  *   - A need still present after its need_max_steps is UNRESOLVED: the
  *     signal cannot isolate it (a symptom no fault explains, e.g. an R_A
  *     estimate below the warm calibration on a cold start). It is then
@@ -46,8 +46,11 @@
  *     to backoff_max_steps; after the back-off it is owed need_max_steps
  *     again. So an unexplainable need costs at most need_max_steps per
  *     back-off, not a burst after every rest.
+ *     The back-off runs on time (every step), enabled or not.
  *   - The need falling (isolated, or the symptom gone) ends the back-off
- *     and the retries: the next need is a new one.
+ *     and the retries: the next need is a new one. The scheduler sees one
+ *     boolean per plant, so a further symptom that appears while an
+ *     unresolved need persists is not a new need until the need falls.
  * After any burst the scheduler rests for rest_steps before a KEYON,
  * LEARN or LACK burst, and the lack count restarts; only a need that is
  * owed test signal may start a burst during the rest (after gap_steps).
