@@ -13,6 +13,9 @@ void canfdi_testsched_default_cfg(canfdi_testsched_cfg_t *cfg)
     cfg->burst_steps = 2500U;
     cfg->need_max_steps = 3000U;
     cfg->rest_steps = 10000U;
+    cfg->gap_steps = 100U;
+    cfg->backoff_steps = 60000U;
+    cfg->backoff_max_steps = 480000U;
     cfg->keyon = true;
   }
 }
@@ -21,11 +24,12 @@ int32_t canfdi_testsched_init(canfdi_testsched_t *s, const canfdi_testsched_cfg_
 {
   int32_t rc = -CANFDI_EINVAL;
   if ((s != NULL) && (cfg != NULL) && (cfg->lack_steps > 0U) && (cfg->burst_steps > 0U) &&
-      (cfg->need_max_steps > 0U)) {
+      (cfg->need_max_steps > 0U) && (cfg->backoff_steps > 0U) && (cfg->backoff_max_steps >= cfg->backoff_steps)) {
     *s = (canfdi_testsched_t){0};
     s->cfg = *cfg;
     s->phase = CANFDI_TESTSCHED_IDLE;
     s->reason = CANFDI_TESTSCHED_REASON_NONE;
+    s->backoff_len = cfg->backoff_steps;
     s->keyon_pending = cfg->keyon;
     s->initialised = true;
     rc = CANFDI_OK;
@@ -47,6 +51,27 @@ static void start(canfdi_testsched_t *s, uint8_t reason)
   if (reason == CANFDI_TESTSCHED_REASON_KEYON) {
     s->keyon_pending = false;
   }
+}
+
+/* The need as the scheduler sees it (header, contract on a need): a need
+ * falling forgets its share and its back-off; a back-off running out
+ * owes the need need_max_steps again. Returns whether the need is owed
+ * test signal this step. */
+static bool owed(canfdi_testsched_t *s, bool need)
+{
+  if (!need) {
+    s->need_n = 0U;
+    s->backoff = 0U;
+    s->backoff_len = s->cfg.backoff_steps;
+  } else if (s->backoff > 0U) {
+    s->backoff--;
+    if (s->backoff == 0U) {
+      s->need_n = 0U;
+    }
+  } else {
+    /* owed, or unresolved just now (on() starts the back-off) */
+  }
+  return need && (s->backoff == 0U) && (s->need_n < s->cfg.need_max_steps);
 }
 
 /* IDLE: count the lack of excitation, start a burst when one is due. */
@@ -72,24 +97,32 @@ static void idle(canfdi_testsched_t *s, bool excited, bool need, bool unlearnt)
   }
 }
 
-/* ON: a NEED burst lasts while needed, a KEYON or LACK burst burst_steps
- * and longer while a need persists; never longer than need_max_steps
- * (or burst_steps if that is longer). */
-static void on(canfdi_testsched_t *s, bool need)
+/* ON, from its second step: a NEED burst lasts while the need is owed
+ * test signal, a KEYON, LEARN or LACK burst burst_steps and longer while a
+ * need is owed. */
+static void on(canfdi_testsched_t *s, bool due)
 {
   const uint32_t min_n = (s->reason == CANFDI_TESTSCHED_REASON_NEED) ? 0U : s->cfg.burst_steps;
-  const uint32_t max_n = (s->cfg.need_max_steps > min_n) ? s->cfg.need_max_steps : min_n;
-  s->n++;
-  if ((s->n >= min_n) && !need) {
+  if ((s->n >= min_n) && !due) {
     enter(s, CANFDI_TESTSCHED_REST);
     s->lack = 0U;
-  } else if (s->n >= max_n) {
-    /* still needed after the longest burst: not isolable with this signal */
-    s->exhausted = need;
-    enter(s, CANFDI_TESTSCHED_REST);
-    s->lack = 0U;
-  } else {
-    /* continues */
+  }
+}
+
+/* A step with the signal on: count it, and the need's share; a need that
+ * has had need_max_steps is unresolved and starts its back-off. */
+static void count_on(canfdi_testsched_t *s, bool due)
+{
+  canfdi_count_inc(&s->n);
+  canfdi_count_inc(&s->diag.on_steps);
+  if (due) {
+    s->need_n++;
+    if (s->need_n >= s->cfg.need_max_steps) {
+      canfdi_count_inc(&s->diag.unresolved);
+      s->backoff = s->backoff_len;
+      s->backoff_len = (s->backoff_len <= (s->cfg.backoff_max_steps / 2U)) ? (s->backoff_len * 2U)
+                                                                           : s->cfg.backoff_max_steps;
+    }
   }
 }
 
@@ -97,16 +130,18 @@ bool canfdi_testsched_step(canfdi_testsched_t *s, bool enabled, bool excited, bo
 {
   bool out = false;
   if ((s != NULL) && s->initialised) {
-    if (!need) {
-      s->exhausted = false;
-    }
-    if ((s->phase == CANFDI_TESTSCHED_REST) && enabled && need && !s->exhausted) {
-      start(s, CANFDI_TESTSCHED_REASON_NEED);
-    } else if (s->phase == CANFDI_TESTSCHED_REST) {
-      s->n++;
-      if (s->n >= s->cfg.rest_steps) {
+    const bool due = owed(s, need);
+    if (s->phase == CANFDI_TESTSCHED_REST) {
+      if (s->n < s->cfg.rest_steps) {
+        s->n++;
+      }
+      if (enabled && due && (s->n >= s->cfg.gap_steps)) {
+        start(s, CANFDI_TESTSCHED_REASON_NEED);
+      } else if (s->n >= s->cfg.rest_steps) {
         enter(s, CANFDI_TESTSCHED_IDLE);
         s->lack = 0U;
+      } else {
+        /* rests */
       }
     } else if (!enabled) {
       if (s->phase == CANFDI_TESTSCHED_ON) {
@@ -114,13 +149,13 @@ bool canfdi_testsched_step(canfdi_testsched_t *s, bool enabled, bool excited, bo
         enter(s, CANFDI_TESTSCHED_REST);
       }
     } else if (s->phase == CANFDI_TESTSCHED_IDLE) {
-      idle(s, excited, need, unlearnt);
+      idle(s, excited, due, unlearnt);
     } else {
-      on(s, need);
+      on(s, due);
     }
     out = (s->phase == CANFDI_TESTSCHED_ON);
     if (out) {
-      canfdi_count_inc(&s->diag.on_steps);
+      count_on(s, due);
     }
   }
   return out;

@@ -21,6 +21,9 @@ static void setup_cfg(bool keyon)
   cfg.burst_steps = 20U;
   cfg.need_max_steps = 50U;
   cfg.rest_steps = 30U;
+  cfg.gap_steps = 5U;
+  cfg.backoff_steps = 200U;
+  cfg.backoff_max_steps = 800U;
   cfg.keyon = keyon;
   ck_assert_int_eq(canfdi_testsched_init(&ts, &cfg), CANFDI_OK);
 }
@@ -50,6 +53,12 @@ START_TEST(test_rejects_bad_cfg)
   ck_assert_int_eq(canfdi_testsched_init(&ts, &c), -CANFDI_EINVAL);
   canfdi_testsched_default_cfg(&c);
   c.need_max_steps = 0U;
+  ck_assert_int_eq(canfdi_testsched_init(&ts, &c), -CANFDI_EINVAL);
+  canfdi_testsched_default_cfg(&c);
+  c.backoff_steps = 0U;
+  ck_assert_int_eq(canfdi_testsched_init(&ts, &c), -CANFDI_EINVAL);
+  canfdi_testsched_default_cfg(&c);
+  c.backoff_max_steps = c.backoff_steps - 1U;
   ck_assert_int_eq(canfdi_testsched_init(&ts, &c), -CANFDI_EINVAL);
   /* an uninitialised or NULL scheduler stays off */
   ck_assert(!canfdi_testsched_step(NULL, true, false, true, true));
@@ -106,25 +115,107 @@ START_TEST(test_need_burst_follows_need)
   ck_assert_uint_eq(run(30U, true, true, true, false), 30U);
   ck_assert_uint_eq(ts.reason, CANFDI_TESTSCHED_REASON_NEED);
   /* isolated: the need ends, so does the burst */
-  ck_assert_uint_eq(run(5U, true, true, false, false), 0U);
+  ck_assert_uint_eq(run(2U, true, true, false, false), 0U);
   ck_assert_uint_eq(ts.phase, CANFDI_TESTSCHED_REST);
-  /* a new fault may interrupt the rest */
+  /* a new fault interrupts the rest once gap_steps have passed */
+  ck_assert_uint_eq(run(cfg.gap_steps - 2U, true, true, true, false), 0U);
   ck_assert(canfdi_testsched_step(&ts, true, true, true, false));
+  ck_assert_uint_eq(ts.diag.bursts[CANFDI_TESTSCHED_REASON_NEED], 2U);
 }
 END_TEST
 
-/* A need the longest burst does not resolve: off for the rest, however
- * long the need lasts, then one more burst. */
-START_TEST(test_exhausted_need_rests)
+/* A new need right after the key-on burst starts a NEED burst after the
+ * gap, not after the rest. */
+START_TEST(test_new_need_after_keyon_starts_at_once)
 {
+  setup_cfg(true);
+  /* the key-on burst, and the step that ends it */
+  ck_assert_uint_eq(run(cfg.burst_steps + 1U, true, true, false, false), cfg.burst_steps);
+  /* the need appears: the gap, then a NEED burst (the rest is far longer) */
+  ck_assert_uint_eq(run(cfg.gap_steps - 1U, true, true, true, false), 0U);
+  ck_assert(canfdi_testsched_step(&ts, true, true, true, false));
+  ck_assert_uint_eq(ts.reason, CANFDI_TESTSCHED_REASON_NEED);
+  /* it is owed need_max_steps: on for all of them */
+  ck_assert_uint_eq(run(cfg.need_max_steps, true, true, true, false), cfg.need_max_steps - 1U);
+}
+END_TEST
+
+/* A need that appears near the end of the key-on burst still gets its
+ * whole need_max_steps (extending the burst), not the key-on's remainder
+ * followed by the rest. */
+START_TEST(test_late_need_in_keyon_gets_its_share)
+{
+  setup_cfg(true);
+  ck_assert_uint_eq(run(cfg.burst_steps - 3U, true, true, false, false), cfg.burst_steps - 3U);
+  ck_assert_uint_eq(run(cfg.need_max_steps, true, true, true, false), cfg.need_max_steps);
+  ck_assert_uint_eq(ts.diag.bursts[CANFDI_TESTSCHED_REASON_KEYON], 1U);
+  /* now unresolved: off for the back-off */
+  ck_assert_uint_eq(run(cfg.backoff_steps - 1U, true, true, true, false), 0U);
+  ck_assert_uint_eq(ts.diag.unresolved, 1U);
+}
+END_TEST
+
+/* A need a complete NEED burst does not resolve is not retried within the
+ * back-off, however long it lasts; then once more, and the next back-off
+ * is twice as long. */
+START_TEST(test_unresolved_need_backs_off)
+{
+  uint32_t k;
   setup_cfg(false);
   /* need_max_steps on; the next step ends the burst */
   ck_assert_uint_eq(run(cfg.need_max_steps + 1U, true, true, true, false), cfg.need_max_steps);
-  ck_assert(ts.exhausted);
-  /* the rest runs out (its last step returns to idle) */
-  ck_assert_uint_eq(run(cfg.rest_steps, true, true, true, false), 0U);
-  ck_assert_uint_eq(run(cfg.need_max_steps + 1U, true, true, true, false), cfg.need_max_steps);
+  ck_assert_uint_eq(ts.diag.unresolved, 1U);
+  /* off for the back-off (the rest long over), also at the lack burst's
+   * time: a lack burst is not extended by the need */
+  ck_assert_uint_eq(run(cfg.backoff_steps - 2U, true, true, true, false), 0U);
+  ck_assert_uint_eq(ts.diag.bursts[CANFDI_TESTSCHED_REASON_NEED], 1U);
+  /* the back-off runs out: owed need_max_steps again */
+  ck_assert_uint_eq(run(2U + cfg.need_max_steps, true, true, true, false), cfg.need_max_steps);
   ck_assert_uint_eq(ts.diag.bursts[CANFDI_TESTSCHED_REASON_NEED], 2U);
+  ck_assert_uint_eq(ts.diag.unresolved, 2U);
+  /* the second back-off is doubled */
+  ck_assert_uint_eq(run(2U * cfg.backoff_steps - 4U, true, true, true, false), 0U);
+  for (k = 0U; (k < 10U) && !canfdi_testsched_step(&ts, true, true, true, false); k++) {
+  }
+  ck_assert_uint_le(k, 3U);
+  ck_assert_uint_eq(ts.diag.bursts[CANFDI_TESTSCHED_REASON_NEED], 3U);
+}
+END_TEST
+
+/* The back-off grows to backoff_max_steps and no further. */
+START_TEST(test_backoff_capped)
+{
+  setup_cfg(false);
+  (void)run(20000U, true, true, true, false);
+  /* back-offs 200, 400, 800, 800, ... */
+  ck_assert_uint_eq(ts.backoff_len, cfg.backoff_max_steps);
+  ck_assert_uint_ge(ts.diag.unresolved, 20000U / (cfg.backoff_max_steps + cfg.need_max_steps));
+  ck_assert_uint_le(ts.diag.unresolved, 3U + (20000U / cfg.backoff_max_steps));
+}
+END_TEST
+
+/* The need falling ends the back-off: the next need is a new one. */
+START_TEST(test_need_falling_ends_backoff)
+{
+  setup_cfg(false);
+  ck_assert_uint_eq(run(cfg.need_max_steps + 1U, true, true, true, false), cfg.need_max_steps);
+  ck_assert_uint_eq(run(cfg.gap_steps, true, true, true, false), 0U);
+  ck_assert_uint_eq(run(1U, true, true, false, false), 0U); /* isolated or gone */
+  ck_assert(canfdi_testsched_step(&ts, true, true, true, false));
+  ck_assert_uint_eq(ts.backoff_len, cfg.backoff_steps);
+}
+END_TEST
+
+/* A NEED burst stopped by the enabling conditions keeps its share: the
+ * need resumes after the gap and has need_max_steps in all. */
+START_TEST(test_aborted_need_keeps_share)
+{
+  setup_cfg(false);
+  ck_assert_uint_eq(run(10U, true, true, true, false), 10U);
+  ck_assert_uint_eq(run(3U, false, true, true, false), 0U);
+  ck_assert_uint_eq(ts.diag.aborted, 1U);
+  ck_assert_uint_eq(run(100U, true, true, true, false), cfg.need_max_steps - 10U);
+  ck_assert_uint_eq(ts.diag.unresolved, 1U);
 }
 END_TEST
 
@@ -163,14 +254,14 @@ START_TEST(test_unlearnt_burst)
 END_TEST
 
 /* Bounded share: with the need always present, the signal is on at most
- * need_max / (need_max + rest) of the time. */
+ * need_max / (need_max + backoff) of the time. */
 START_TEST(test_share_bounded)
 {
   const uint32_t n = 10000U;
   uint32_t on;
   setup_cfg(false);
   on = run(n, true, true, true, false);
-  ck_assert_uint_le(on, (n * cfg.need_max_steps) / (cfg.need_max_steps + cfg.rest_steps) + cfg.need_max_steps);
+  ck_assert_uint_le(on, (n * cfg.need_max_steps) / (cfg.need_max_steps + cfg.backoff_steps) + cfg.need_max_steps);
   ck_assert_uint_eq(ts.diag.on_steps, on);
 }
 END_TEST
@@ -184,7 +275,12 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_lack_counts_enabled_steps_only);
   tcase_add_test(tc, test_natural_excitation_suffices);
   tcase_add_test(tc, test_need_burst_follows_need);
-  tcase_add_test(tc, test_exhausted_need_rests);
+  tcase_add_test(tc, test_new_need_after_keyon_starts_at_once);
+  tcase_add_test(tc, test_late_need_in_keyon_gets_its_share);
+  tcase_add_test(tc, test_unresolved_need_backs_off);
+  tcase_add_test(tc, test_backoff_capped);
+  tcase_add_test(tc, test_need_falling_ends_backoff);
+  tcase_add_test(tc, test_aborted_need_keeps_share);
   tcase_add_test(tc, test_need_extends_keyon);
   tcase_add_test(tc, test_abort_when_disabled);
   tcase_add_test(tc, test_unlearnt_burst);
