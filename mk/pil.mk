@@ -101,12 +101,14 @@ fp_obj = $(FP_SRC:%.c=$(FP_DIR)/$(1)/obj/%.o)
 define FP_RULES
 $(FP_DIR)/$(1)/obj/%.o: %.c
 	@mkdir -p $$(@D)
-	@$(ARM_CC) $(TGT_ARCH_$(call pil_core,$(1))) $(TGT_CFLAGS) -fstack-usage -fcallgraph-info=su -c $$< -o $$@
+	@$(ARM_CC) $(TGT_ARCH_$(call pil_core,$(1))) $(TGT_CFLAGS) -MMD -MP -fstack-usage -fcallgraph-info=su -c $$< -o $$@
 $(FP_DIR)/$(1)/canfdi_app.elf: $(call fp_obj,$(1)) $(TGT_LDSCRIPTS)
 	$(ARM_CC) $(TGT_ARCH_$(call pil_core,$(1))) --specs=nano.specs --specs=nosys.specs \
 	  $(call tgt_link,$(call pil_ld,$(1))) -Wl,-Map,$$(@:.elf=.map) -o $$@ $$(filter %.o,$$^)
 endef
 $(foreach m,$(PIL_MACHINES),$(eval $(call FP_RULES,$(m))))
+# header dependencies of the footprint objects (a changed struct rebuilds them)
+-include $(foreach m,$(PIL_MACHINES),$(call fp_obj,$(m):.o=.d))
 
 .PHONY: footprint
 footprint: $(foreach m,$(PIL_MACHINES),$(FP_DIR)/$(m)/canfdi_app.elf)

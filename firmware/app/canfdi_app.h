@@ -133,10 +133,11 @@
  * diagnosis and the symptom vector split over slots of their own; M0 runs
  * ~2x the M4 count, so 24 000 there needs the base cost (today >= 52 000)
  * more than halved, not only spread.
- * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host)
- * and is the .bss of `make firmware` on the targets; all of the
- * application's RAM, static: 10 848 bytes on Cortex-M, 740 of them the
- * diagnostic server (uds/canfdi_uds.h). No heap.
+ * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
+ * all of the application's RAM, static: 11 136 bytes on Cortex-M (740 of
+ * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
+ * copy); the application image's static RAM and worst-case stack per core
+ * are `make footprint`'s (11 636 B and 1 960 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H
