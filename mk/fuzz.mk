@@ -36,8 +36,25 @@ FUZZ_SIM_SRC := $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.
 FUZZ_SIM_OBJ := $(FUZZ_SIM_SRC:%.c=$(FUZZ_OUT)/obj/%.o)
 FUZZ_REPLAY_OBJ := $(FUZZ_OUT)/obj/tools/replay/replay_candump.o
 
+# The DBC ranges of every signal (fuzz_app_rx): generated from the tester
+# codec of mk/replay.mk (cantools, every message), compiled here.
+# (mk/replay.mk is read after this file: its paths spelled out here, its
+# rule makes them.)
+FUZZ_RANGES_C := $(FUZZ_OUT)/gen/fuzz_ranges.c
+FUZZ_CODEC_DIR := $(BUILD)/gen/replay
+$(FUZZ_RANGES_C): $(FUZZ_CODEC_DIR)/canfdi_rp_msg.h $(FUZZ_DIR)/gen_ranges.py
+	@mkdir -p $(@D)
+	python3 $(FUZZ_DIR)/gen_ranges.py $< $@
+$(FUZZ_OUT)/obj/gen/fuzz_ranges.o: $(FUZZ_RANGES_C)
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -I$(FUZZ_CODEC_DIR) -c $< -o $@
+$(FUZZ_OUT)/obj/replay/canfdi_rp_msg.o: $(FUZZ_CODEC_DIR)/canfdi_rp_msg.c
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -c $< -o $@
+$(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_app_rx.o: $(FUZZ_RANGES_C)
+
 # What each harness links besides its own source.
-FUZZ_LINK_app_rx := $(FUZZ_OUT)/libfw.a
+FUZZ_LINK_app_rx := $(FUZZ_OUT)/obj/gen/fuzz_ranges.o $(FUZZ_OUT)/obj/replay/canfdi_rp_msg.o $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_uds := $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_nvm := $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_candump := $(FUZZ_REPLAY_OBJ)
