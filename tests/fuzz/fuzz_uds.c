@@ -38,7 +38,7 @@
 #define RESP 0x7E8U
 #define MAX_OPS 512U
 #define MAX_STEPS 12000U /* > the security delay (10 s) + S3 (5 s) */
-#define KEYS 8U
+#define KEYS MAX_OPS /* every key attempt of an input: the server queues 4 requests, a log of the last few missed a right key queued before wrong ones */
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -96,8 +96,17 @@ static void note_request(const uint8_t *d, uint8_t dlc)
   }
 }
 
+static bool trace; /* FUZZ_TRACE=1: print every frame sent and reply (seeds, crashes) */
+
 static void send(uint32_t id, const uint8_t *d, uint8_t dlc)
 {
+  if (trace) {
+    fprintf(stderr, "t=%u ms %03X", t.steps, (unsigned)id);
+    for (uint8_t k = 0U; k < dlc; k++) {
+      fprintf(stderr, " %02X", d[k]);
+    }
+    fprintf(stderr, "\n");
+  }
   if (id == PHYS) {
     note_request(d, dlc);
   } else if ((dlc >= 2U) && ((d[0] >> 4) == 0U)) {
@@ -122,8 +131,6 @@ static size_t min_len(uint8_t rsid)
   default: return 0U; /* not a service of this server */
   }
 }
-
-static bool trace; /* FUZZ_TRACE=1: print every response (seeds, crashes) */
 
 static void check_response(const uint8_t *r, uint32_t len)
 {
