@@ -23,7 +23,7 @@ FUZZ_SECONDS ?= 60
 FUZZ_TEST_SECONDS ?= 12
 FUZZ_DIR := tests/fuzz
 FUZZ_OUT := $(BUILD)/fuzz
-FUZZ_ALL := app_rx uds nvm candump scenario
+FUZZ_ALL := app_rx uds nvm candump scenario codec
 FUZZ_HARNESSES ?= $(FUZZ_ALL)
 FUZZ_SANITIZE := -fsanitize=fuzzer,address,undefined,integer,implicit-conversion \
                  -fno-sanitize-recover=all -fsanitize-ignorelist=$(FUZZ_DIR)/ignorelist.txt
@@ -42,22 +42,23 @@ FUZZ_REPLAY_OBJ := $(FUZZ_OUT)/obj/tools/replay/replay_candump.o
 # rule makes them.)
 FUZZ_RANGES_C := $(FUZZ_OUT)/gen/fuzz_ranges.c
 FUZZ_CODEC_DIR := $(BUILD)/gen/replay
-$(FUZZ_RANGES_C): $(FUZZ_CODEC_DIR)/canfdi_rp_msg.h $(FUZZ_DIR)/gen_ranges.py
+$(FUZZ_RANGES_C): $(FUZZ_CODEC_DIR)/canfdi_rp_msg.h $(FUZZ_DIR)/gen_ranges.py firmware/comm/gen/canfdi_msg.h
 	@mkdir -p $(@D)
-	python3 $(FUZZ_DIR)/gen_ranges.py $< $@
+	python3 $(FUZZ_DIR)/gen_ranges.py $< $@ firmware/comm/gen/canfdi_msg.h
 $(FUZZ_OUT)/obj/gen/fuzz_ranges.o: $(FUZZ_RANGES_C)
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -I$(FUZZ_CODEC_DIR) -c $< -o $@
 $(FUZZ_OUT)/obj/replay/canfdi_rp_msg.o: $(FUZZ_CODEC_DIR)/canfdi_rp_msg.c
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -c $< -o $@
-$(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_app_rx.o: $(FUZZ_RANGES_C)
+$(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_app_rx.o $(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_codec.o: $(FUZZ_RANGES_C)
 
 # What each harness links besides its own source.
 FUZZ_LINK_app_rx := $(FUZZ_OUT)/obj/gen/fuzz_ranges.o $(FUZZ_OUT)/obj/replay/canfdi_rp_msg.o $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_uds := $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_nvm := $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_candump := $(FUZZ_REPLAY_OBJ)
+FUZZ_LINK_codec := $(FUZZ_LINK_app_rx)
 FUZZ_LINK_scenario := $(FUZZ_OUT)/libsim.a $(FUZZ_OUT)/libfw.a
 
 FUZZ_BIN := $(FUZZ_ALL:%=$(FUZZ_OUT)/fuzz_%)

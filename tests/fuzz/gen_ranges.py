@@ -40,3 +40,36 @@ for m in msgs:
     out += ['    return true;', '  }']
 out += ['  default:', '    return true;', '  }', '}', '']
 open(out_path, "w").write("\n".join(out))
+
+# The codec round trip (fuzz_codec): for message k of the tester codec,
+# unpack the bytes; if they unpack, pack and unpack again and compare; where
+# the firmware has its own unpack (comm/gen/canfdi_msg.h, the messages it
+# receives), its struct must equal the tester codec's field by field.
+fw_hdr = open(sys.argv[3]).read() if len(sys.argv) > 3 else ""
+fw_unpack = set(re.findall(r"int canfdi_msg_(\w+)_unpack\(", fw_hdr))
+c = ['', '#include <string.h>']
+if fw_hdr:
+    c.append('#include "comm/gen/canfdi_msg.h"')
+c += ['', 'const unsigned fuzz_codec_count = %dU;' % len(msgs), '',
+      'const char *fuzz_codec_check(unsigned k, const uint8_t *d, uint8_t dlc)', '{',
+      '  uint8_t buf[64];', '  switch (k) {']
+for i, m in enumerate(msgs):
+    t = 'struct %s_%s_t' % (prefix, m)
+    c += ['  case %dU: {' % i, '    %s a;' % t, '    %s b;' % t,
+          '    memset(&a, 0, sizeof a);', '    memset(&b, 0, sizeof b);',
+          '    if (%s_%s_unpack(&a, d, dlc) != 0) {' % (prefix, m), '      return NULL;', '    }',
+          '    const int n = %s_%s_pack(buf, &a, sizeof buf);' % (prefix, m),
+          '    if ((n < 0) || (%s_%s_unpack(&b, buf, (size_t)n) != 0) || (memcmp(&a, &b, sizeof a) != 0)) {' % (prefix, m),
+          '      return "%s: pack(unpack(x)) does not unpack to the same signals";' % m, '    }']
+    if m in fw_unpack:
+        sigs = re.search(r"struct canfdi_msg_%s_t \{(.*?)\};" % m, fw_hdr, re.S).group(1)
+        fields = re.findall(r"^\s*\w+ (\w+);", sigs, re.M)
+        c += ['    struct canfdi_msg_%s_t f;' % m, '    memset(&f, 0, sizeof f);',
+              '    if (canfdi_msg_%s_unpack(&f, d, dlc) != 0) {' % m,
+              '      return "%s: the firmware codec refuses what the tester codec unpacks";' % m, '    }']
+        for fld in fields:
+            c += ['    if (f.%s != a.%s) {' % (fld, fld), '      return "%s.%s: firmware and tester codecs differ";' % (m, fld), '    }']
+    c += ['    return NULL;', '  }']
+c += ['  default:', '    return NULL;', '  }', '}', '']
+with open(out_path, "a") as f:
+    f.write("\n".join(c))
