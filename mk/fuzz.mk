@@ -17,6 +17,9 @@
 # sanitizer ignore list tests/fuzz/ignorelist.txt exempts, function by
 # function and each with its reason, the arithmetic that wraps or truncates
 # by design (CRCs, counters that wrap by intent, codec packing).
+# The Python readers (the signal map, the scenario file, the log readers of
+# canfdi-replay) have an atheris harness, tests/fuzz/py/fuzz_py_readers.py,
+# run by the same targets as the harness `py_readers`.
 
 FUZZ_CC ?= clang
 FUZZ_SECONDS ?= 60
@@ -24,7 +27,10 @@ FUZZ_TEST_SECONDS ?= 12
 FUZZ_DIR := tests/fuzz
 FUZZ_OUT := $(BUILD)/fuzz
 FUZZ_ALL := app_rx uds nvm candump scenario codec
-FUZZ_HARNESSES ?= $(FUZZ_ALL)
+# Python readers (atheris, in the project venv): run like the others.
+FUZZ_PY := py_readers
+FUZZ_CMD_py_readers = $(PY) $(FUZZ_DIR)/py/fuzz_py_readers.py
+FUZZ_HARNESSES ?= $(FUZZ_ALL) $(FUZZ_PY)
 FUZZ_SANITIZE := -fsanitize=fuzzer,address,undefined,integer,implicit-conversion \
                  -fno-sanitize-recover=all -fsanitize-ignorelist=$(FUZZ_DIR)/ignorelist.txt
 FUZZ_CFLAGS := $(C_STD) -O1 -g -fno-omit-frame-pointer $(FUZZ_SANITIZE) $(FW_INC) $(HOST_ASSERT) \
@@ -90,17 +96,17 @@ fuzz_run = set -e; h=$(1); \
 	mkdir -p $(FUZZ_OUT)/found/$$h $(FUZZ_OUT)/crash; \
 	dirs=""; for d in $(FUZZ_DIR)/corpus/$$h $(FUZZ_DIR)/regress/$$h; do [ -d $$d ] && dirs="$$dirs $$d"; done; \
 	echo "== fuzz_$$h: replay$$dirs"; \
-	$(FUZZ_OUT)/fuzz_$$h -runs=0 $$dirs 2>$(FUZZ_OUT)/$$h.replay.log || { cat $(FUZZ_OUT)/$$h.replay.log; exit 1; }; \
+	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) -runs=0 $$dirs 2>$(FUZZ_OUT)/$$h.replay.log || { cat $(FUZZ_OUT)/$$h.replay.log; exit 1; }; \
 	echo "== fuzz_$$h: $(2) s"; \
-	$(FUZZ_OUT)/fuzz_$$h -max_total_time=$(2) -print_final_stats=1 -timeout=10 -rss_limit_mb=1024 \
+	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) -max_total_time=$(2) -print_final_stats=1 -timeout=10 -rss_limit_mb=1024 \
 	  -artifact_prefix=$(FUZZ_OUT)/crash/$$h- $(FUZZ_OUT)/found/$$h $$dirs >$(FUZZ_OUT)/$$h.log 2>&1 || \
 	  { tail -60 $(FUZZ_OUT)/$$h.log; echo "fuzz_$$h: crash, input in $(FUZZ_OUT)/crash/"; exit 1; }; \
 	grep -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added)' $(FUZZ_OUT)/$$h.log | tr '\n' ' '; echo
 
-fuzz: $(FUZZ_HARNESSES:%=$(FUZZ_OUT)/fuzz_%)
+fuzz: $(patsubst %,$(FUZZ_OUT)/fuzz_%,$(filter-out $(FUZZ_PY),$(FUZZ_HARNESSES)))
 	@$(foreach h,$(FUZZ_HARNESSES),$(call fuzz_run,$(h),$(FUZZ_SECONDS));)
 
 fuzz-test: deps $(FUZZ_BIN)
-	@$(foreach h,$(FUZZ_ALL),$(call fuzz_run,$(h),$(FUZZ_TEST_SECONDS));)
+	@$(foreach h,$(FUZZ_ALL) $(FUZZ_PY),$(call fuzz_run,$(h),$(FUZZ_TEST_SECONDS));)
 
 TEST_STEPS += fuzz-test
