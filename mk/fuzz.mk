@@ -26,7 +26,7 @@ FUZZ_SECONDS ?= 60
 FUZZ_TEST_SECONDS ?= 12
 FUZZ_DIR := tests/fuzz
 FUZZ_OUT := $(BUILD)/fuzz
-FUZZ_ALL := app_rx uds nvm candump scenario codec
+FUZZ_ALL := app_rx uds isotp nvm candump scenario codec
 # Python readers (atheris, in the project venv): run like the others.
 FUZZ_PY := py_readers
 FUZZ_CMD_py_readers = $(PY) $(FUZZ_DIR)/py/fuzz_py_readers.py
@@ -63,6 +63,7 @@ $(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_app_rx.o $(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_codec
 FUZZ_LINK_app_rx := $(FUZZ_OUT)/obj/gen/fuzz_ranges.o $(FUZZ_OUT)/obj/replay/canfdi_rp_msg.o $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_uds := $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_nvm := $(FUZZ_OUT)/libfw.a
+FUZZ_LINK_isotp := $(FUZZ_OUT)/libfw.a
 FUZZ_LINK_candump := $(FUZZ_REPLAY_OBJ)
 FUZZ_LINK_codec := $(FUZZ_LINK_app_rx)
 FUZZ_LINK_scenario := $(FUZZ_OUT)/libsim.a $(FUZZ_OUT)/libfw.a
