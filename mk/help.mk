@@ -57,6 +57,8 @@ Tests (`make test` runs those marked *)
   make replay-test        * canfdi-replay on SIL and HIL recordings, every log format, bad input (tests/replay)
   make fleet-test         * canfdi-fleet on a small synthetic fleet: Dask, rerun, failed files, carried memory, Parquet
   make fleet-acceptance     a 20 x 10 synthetic fleet against its truth (FLEET_SEED=1): detection drive, false codes, RUL, memory
+  make fuzz-test          * replay the fuzz corpora and regressions, then fuzz each harness 12 s (tests/fuzz)
+  make static-check       * cppcheck + MISRA C:2012 addon and clang-tidy clang-analyzer-* over firmware/ (docs/misra.md)
 
 Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figure)
   make bench                all of the following
@@ -77,6 +79,10 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
 Drive profiles (docs/driving.md)
   make drive-profiles       the WLTC class 3 drive profiles, $(BUILD)/drive/*.csv (+ .json summaries)
   make drive-plot           $(BUILD)/drive/wltc3_10min_s1.png: the 10-minute profile over time
+
+Hostile input (tests/fuzz/README.md)
+  make fuzz                 every libFuzzer harness for FUZZ_SECONDS (60) each; FUZZ_HARNESSES="uds nvm" for some
+  make fuzz-build           build the harnesses (build/fuzz/fuzz_*)
 
 Code
   make dbc-gen              regenerate the C codecs and tables after editing dbc/

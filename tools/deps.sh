@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Install what canfdi needs and nothing else; idempotent.
-#   1. Debian packages (only those missing; apt-get runs only if one is),
+#   1. Debian packages (only those missing; apt-get runs only if one is;
+#      clang with its libFuzzer/sanitizer runtimes, cppcheck and clang-tidy
+#      for `make fuzz-test` and `make static-check`),
 #      some of them for i386 (the 32-bit unit tests, `make unit-m32`): the
 #      i386 architecture is added to dpkg once.
 #   2. The i386 libcheck: Debian's `check` is not Multi-Arch, so check:i386
@@ -25,6 +27,7 @@ APT_PACKAGES=(
   can-utils user-mode-linux kmod iproute2
   python3 python3-venv
   zlib1g-dev chromium-headless-shell
+  clang libclang-rt-14-dev cppcheck clang-tidy
 )
 
 # Extra package groups a make target asks for (`tools/deps.sh GROUP...`),

@@ -65,6 +65,9 @@ static void rx_idle(canfdi_isotp_t *t)
   t->rx_timer_ms = 0U;
   t->rx_sn = 0U;
   t->rx_block = 0U;
+  /* a reception that ended (new SF/FF, wrong SN, bad length, timeout) gets
+   * no flow control still pending for it: no stray CTS to the tester */
+  t->fc_pending = 0U;
 }
 
 static void tx_idle(canfdi_isotp_t *t)

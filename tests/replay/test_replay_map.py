@@ -104,6 +104,8 @@ def test_mapped_bus_at_10_ms(late_log: Path, tmp_path: Path) -> None:
     ("dbc = vehicle.dbc\nDcmUa = MotorFb.ArmVoltage unit V\nDcmUa = MotorFb.ArmVoltage unit V\n",
      ":3: DcmUa is mapped twice"),
     ("dbc = missing.dbc\nDcmUa = MotorFb.ArmVoltage unit V\n", "cannot load the other DBC"),
+    # found by fuzzing (tests/fuzz/regress/py_readers): a traceback, not a message
+    ("dbc = vehicle\0.dbc\nDcmUa = MotorFb.ArmVoltage unit V\n", ":1: bad DBC path"),
 ])
 def test_bad_map_files(text: str, message: str, late_log: Path, tmp_path: Path) -> None:
     (tmp_path / "vehicle.dbc").write_text((DATA / "vehicle.dbc").read_text())

@@ -133,7 +133,10 @@ class Mapper:
                 raise MapError(f"{path}:{no}: expected 'NAME = ...', got {raw.strip()!r}")
             key, rest = m.group(1), m.group(2)
             if key == "dbc":
-                dbc_path = (path.parent / rest).resolve()
+                try:
+                    dbc_path = (path.parent / rest).resolve()
+                except (OSError, ValueError) as e:  # a NUL byte, a loop of links
+                    raise MapError(f"{path}:{no}: bad DBC path {rest!r}: {e}") from e
                 continue
             if key in seen:
                 raise MapError(f"{path}:{no}: {key} is mapped twice (first on line {seen[key]})")

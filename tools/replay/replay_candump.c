@@ -136,7 +136,7 @@ int rp_candump_parse(const char *s, size_t n, rp_frame_t *f, const char **why)
   while ((i < n) && is_space(s[i])) {
     i++;
   }
-  while ((i < n) && (hexval(s[i]) >= 0) && (nid < 9U)) {
+  while ((i < n) && (hexval(s[i]) >= 0) && (nid < 8U)) { /* 8 digits fill 32 bits: no bit shifted out */
     id = (id << 4) | (uint32_t)hexval(s[i]);
     nid++;
     i++;

@@ -1,0 +1,113 @@
+# mk/fuzz.mk — libFuzzer harnesses over everything that reads bytes from
+# outside (issue 15; tests/fuzz/README.md, README "Hostile input"):
+#
+#   make fuzz [FUZZ_SECONDS=60] [FUZZ_HARNESSES="app_rx uds"]
+#                      every harness (or those named) for FUZZ_SECONDS each,
+#                      one after the other; new inputs go to
+#                      $(BUILD)/fuzz/found/<harness>/, crashes to
+#                      $(BUILD)/fuzz/crash/ (a crash fails the target)
+#   make fuzz-test     (make test) replay every seed corpus and regression
+#                      input, then fuzz each harness FUZZ_TEST_SECONDS (12)
+#   make fuzz-build    build the harnesses only
+#
+# The harnesses: clang's libFuzzer with ASan and UBSan including the
+# integer, shift and implicit-conversion groups, no recovery (a finding
+# aborts). They drive the real modules, compiled here with these flags into
+# $(BUILD)/fuzz/obj (never the host objects, which gcc builds). The
+# sanitizer ignore list tests/fuzz/ignorelist.txt exempts, function by
+# function and each with its reason, the arithmetic that wraps or truncates
+# by design (CRCs, counters that wrap by intent, codec packing).
+# The Python readers (the signal map, the scenario file, the log readers of
+# canfdi-replay) have an atheris harness, tests/fuzz/py/fuzz_py_readers.py,
+# run by the same targets as the harness `py_readers`.
+
+FUZZ_CC ?= clang
+FUZZ_SECONDS ?= 60
+FUZZ_TEST_SECONDS ?= 12
+FUZZ_DIR := tests/fuzz
+FUZZ_OUT := $(BUILD)/fuzz
+FUZZ_ALL := app_rx uds isotp nvm candump scenario codec
+# Python readers (atheris, in the project venv): run like the others.
+FUZZ_PY := py_readers
+FUZZ_CMD_py_readers = $(PY) $(FUZZ_DIR)/py/fuzz_py_readers.py
+FUZZ_HARNESSES ?= $(FUZZ_ALL) $(FUZZ_PY)
+FUZZ_SANITIZE := -fsanitize=fuzzer,address,undefined,integer,implicit-conversion \
+                 -fno-sanitize-recover=all -fsanitize-ignorelist=$(FUZZ_DIR)/ignorelist.txt
+FUZZ_CFLAGS := $(C_STD) -O1 -g -fno-omit-frame-pointer $(FUZZ_SANITIZE) $(FW_INC) $(HOST_ASSERT) \
+               -Ihost_sim -Itools/replay -I$(FUZZ_DIR)
+
+FUZZ_FW_OBJ := $(FW_SRC:%.c=$(FUZZ_OUT)/obj/%.o)
+FUZZ_SIM_SRC := $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,$(sort $(wildcard host_sim/*.c))) \
+                $(sort $(wildcard host_sim/gen/*.c))
+FUZZ_SIM_OBJ := $(FUZZ_SIM_SRC:%.c=$(FUZZ_OUT)/obj/%.o)
+FUZZ_REPLAY_OBJ := $(FUZZ_OUT)/obj/tools/replay/replay_candump.o
+
+# The DBC ranges of every signal (fuzz_app_rx): generated from the tester
+# codec of mk/replay.mk (cantools, every message), compiled here.
+# (mk/replay.mk is read after this file: its paths spelled out here, its
+# rule makes them.)
+FUZZ_RANGES_C := $(FUZZ_OUT)/gen/fuzz_ranges.c
+FUZZ_CODEC_DIR := $(BUILD)/gen/replay
+$(FUZZ_RANGES_C): $(FUZZ_CODEC_DIR)/canfdi_rp_msg.h $(FUZZ_DIR)/gen_ranges.py firmware/comm/gen/canfdi_msg.h
+	@mkdir -p $(@D)
+	python3 $(FUZZ_DIR)/gen_ranges.py $< $@ firmware/comm/gen/canfdi_msg.h
+$(FUZZ_OUT)/obj/gen/fuzz_ranges.o: $(FUZZ_RANGES_C)
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -I$(FUZZ_CODEC_DIR) -c $< -o $@
+$(FUZZ_OUT)/obj/replay/canfdi_rp_msg.o: $(FUZZ_CODEC_DIR)/canfdi_rp_msg.c
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -c $< -o $@
+$(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_app_rx.o $(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_codec.o: $(FUZZ_RANGES_C)
+
+# What each harness links besides its own source.
+FUZZ_LINK_app_rx := $(FUZZ_OUT)/obj/gen/fuzz_ranges.o $(FUZZ_OUT)/obj/replay/canfdi_rp_msg.o $(FUZZ_OUT)/libfw.a
+FUZZ_LINK_uds := $(FUZZ_OUT)/libfw.a
+FUZZ_LINK_nvm := $(FUZZ_OUT)/libfw.a
+FUZZ_LINK_isotp := $(FUZZ_OUT)/libfw.a
+FUZZ_LINK_candump := $(FUZZ_REPLAY_OBJ)
+FUZZ_LINK_codec := $(FUZZ_LINK_app_rx)
+FUZZ_LINK_scenario := $(FUZZ_OUT)/libsim.a $(FUZZ_OUT)/libfw.a
+
+FUZZ_BIN := $(FUZZ_ALL:%=$(FUZZ_OUT)/fuzz_%)
+
+$(FUZZ_OUT)/obj/%.o: %.c $(FUZZ_DIR)/ignorelist.txt
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(SRC_CFLAGS_$<) -MMD -MP -c $< -o $@
+
+$(FUZZ_OUT)/libfw.a: $(FUZZ_FW_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(FUZZ_OUT)/libsim.a: $(FUZZ_SIM_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+define FUZZ_RULE
+$(FUZZ_OUT)/fuzz_$(1): $(FUZZ_OUT)/obj/$(FUZZ_DIR)/fuzz_$(1).o $(FUZZ_LINK_$(1))
+	$(FUZZ_CC) $(FUZZ_SANITIZE) -o $$@ $$^ -lm
+endef
+$(foreach h,$(FUZZ_ALL),$(eval $(call FUZZ_RULE,$(h))))
+
+.PHONY: fuzz fuzz-test fuzz-build
+fuzz-build: $(FUZZ_BIN)
+
+# $(call fuzz_run,HARNESS,SECONDS): replay the seeds and regressions, then
+# fuzz for SECONDS from them; new inputs in $(FUZZ_OUT)/found/HARNESS.
+fuzz_run = set -e; h=$(1); \
+	mkdir -p $(FUZZ_OUT)/found/$$h $(FUZZ_OUT)/crash; \
+	dirs=""; for d in $(FUZZ_DIR)/corpus/$$h $(FUZZ_DIR)/regress/$$h; do [ -d $$d ] && dirs="$$dirs $$d"; done; \
+	echo "== fuzz_$$h: replay$$dirs"; \
+	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) -runs=0 $$dirs 2>$(FUZZ_OUT)/$$h.replay.log || { cat $(FUZZ_OUT)/$$h.replay.log; exit 1; }; \
+	echo "== fuzz_$$h: $(2) s"; \
+	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) -max_total_time=$(2) -print_final_stats=1 -timeout=10 -rss_limit_mb=1024 \
+	  -artifact_prefix=$(FUZZ_OUT)/crash/$$h- $(FUZZ_OUT)/found/$$h $$dirs >$(FUZZ_OUT)/$$h.log 2>&1 || \
+	  { tail -60 $(FUZZ_OUT)/$$h.log; echo "fuzz_$$h: crash, input in $(FUZZ_OUT)/crash/"; exit 1; }; \
+	grep -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added)' $(FUZZ_OUT)/$$h.log | tr '\n' ' '; echo
+
+fuzz: $(patsubst %,$(FUZZ_OUT)/fuzz_%,$(filter-out $(FUZZ_PY),$(FUZZ_HARNESSES)))
+	@$(foreach h,$(FUZZ_HARNESSES),$(call fuzz_run,$(h),$(FUZZ_SECONDS));)
+
+fuzz-test: deps $(FUZZ_BIN)
+	@$(foreach h,$(FUZZ_ALL) $(FUZZ_PY),$(call fuzz_run,$(h),$(FUZZ_TEST_SECONDS));)
+
+TEST_STEPS += fuzz-test
