@@ -15,12 +15,22 @@
  * (instructions; F the first step whose frames differ, -1 for none), and
  * when the log holds a tester's UDS requests (0x7E0/0x7DF) a second line
  *   pil: uds_steps U max X max_step S
- * over the steps with a request received or a response (0x7E8) sent; exits
- * 1 when a frame differs, 2 when the run cannot start.
+ * over the steps with a request received or a response (0x7E8) sent, and
+ *   pil: ram heap_top H stack_low L free F
+ * (the end of newlib's heap and the lowest stack byte written, both
+ * addresses, and the bytes never touched between them); exits 1 when a frame
+ * differs, 2 when the run cannot start, 3 when the stack and the heap met
+ * (the run's results are then not to be trusted).
+ *
+ * The harness uses no stdio and no heap: the log is read with read() into
+ * a static chunk and the results are formatted here and written with
+ * write(); the run ends with _exit(). newlib's FILEs, 1 KiB buffers, printf
+ * and malloc state would take about 3 KiB, which the 16 KiB of the
+ * Cortex-M0 machine do not have next to the application.
  */
-#include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "app/canfdi_app.h"
 
@@ -29,6 +39,114 @@
 #define SYST_CVR (*(volatile uint32_t *)0xE000E018U)
 
 extern void initialise_monitor_handles(void);
+extern void *_sbrk(ptrdiff_t incr);
+
+/* RAM between the heap and the stack is painted at start; after the run the
+ * lowest written word above the heap is the stack's low-water mark.
+ * RAM_GUARD bytes under main's frame are left alone (paint_ram's own
+ * frame). */
+#define RAM_PAINT 0xA5C3E10FU
+#define RAM_GUARD 256U
+static uint32_t *paint_lo;
+static uint32_t *paint_hi;
+
+static __attribute__((noinline)) void paint_ram(void)
+{
+  uint32_t here = 0U;
+  uint32_t *p;
+  paint_lo = (uint32_t *)(((uintptr_t)_sbrk(0) + 3U) & ~(uintptr_t)3U);
+  paint_hi = (uint32_t *)(((uintptr_t)&here - RAM_GUARD) & ~(uintptr_t)3U);
+  for (p = paint_lo; p < paint_hi; p++) {
+    *p = RAM_PAINT;
+  }
+}
+
+/* Output: text into a static buffer, written to stdout (semihosting). */
+static char out_buf[64];
+static size_t out_len;
+static void out_flush(void)
+{
+  if (out_len > 0U) {
+    (void)write(1, out_buf, out_len);
+    out_len = 0U;
+  }
+}
+static void out_s(const char *s)
+{
+  while (*s != '\0') {
+    if (out_len == sizeof out_buf) {
+      out_flush();
+    }
+    out_buf[out_len++] = *s++;
+  }
+}
+static void out_u(uint32_t v)
+{
+  char d[11];
+  size_t i = sizeof d - 1U;
+  d[i] = '\0';
+  do {
+    d[--i] = (char)('0' + (v % 10U));
+    v /= 10U;
+  } while (v != 0U);
+  out_s(&d[i]);
+}
+static void out_x(uint32_t v)
+{
+  static const char hex[] = "0123456789abcdef";
+  char d[11];
+  unsigned i;
+  d[0] = '0';
+  d[1] = 'x';
+  for (i = 0U; i < 8U; i++) {
+    d[2U + i] = hex[(v >> (28U - (4U * i))) & 0xFU];
+  }
+  d[10] = '\0';
+  out_s(d);
+}
+static void out_kv(const char *key, uint32_t v)
+{
+  out_s(key);
+  out_u(v);
+}
+static __attribute__((noreturn)) void finish(const char *msg, int rc)
+{
+  out_s(msg);
+  out_flush();
+  _exit(rc);
+}
+
+/* One line of the log (without its newline) into line; 0 at the end. */
+static char chunk[128];
+static size_t chunk_len;
+static size_t chunk_pos;
+static int read_line(int fd, char *line, size_t cap)
+{
+  size_t n = 0U;
+  int got = 0;
+  for (;;) {
+    if (chunk_pos == chunk_len) {
+      ssize_t r = read(fd, chunk, sizeof chunk);
+      chunk_pos = 0U;
+      chunk_len = (r > 0) ? (size_t)r : 0U;
+      if (chunk_len == 0U) {
+        break;
+      }
+    }
+    got = 1;
+    {
+      char c = chunk[chunk_pos++];
+      if (c == '\n') {
+        break;
+      }
+      if (n + 1U < cap) {
+        line[n++] = c;
+      }
+    }
+  }
+  line[n] = '\0';
+  return got;
+}
 
 #ifndef BENCH_TICKS_NUM
 #define BENCH_TICKS_NUM 8U
@@ -197,23 +315,22 @@ static __attribute__((noinline)) int32_t app_init(void)
 int main(void)
 {
   static char line[128];
-  FILE *f;
+  int fd;
   uint32_t cur_t = 0U;
   bool have = false;
   initialise_monitor_handles();
+  paint_ram();
   SYST_RVR = 0x00FFFFFFU;
   SYST_CVR = 0U;
   SYST_CSR = 0x5U; /* core clock, enabled, no interrupt */
   if (app_init() != CANFDI_OK) {
-    printf("pil: init failed\n");
-    exit(2);
+    finish("pil: init failed\n", 2);
   }
-  f = fopen("pil.log", "r");
-  if (f == NULL) {
-    printf("pil: cannot open pil.log in the working directory\n");
-    exit(2);
+  fd = open("pil.log", O_RDONLY);
+  if (fd < 0) {
+    finish("pil: cannot open pil.log in the working directory\n", 2);
   }
-  while (fgets(line, (int)sizeof line, f) != NULL) {
+  while (read_line(fd, line, sizeof line) != 0) {
     logged_t fr;
     uint32_t t_us;
     if (parse_line(line, &t_us, &fr) != 0) {
@@ -236,19 +353,46 @@ int main(void)
   if (have) {
     do_step(cur_t);
   }
-  (void)fclose(f);
-  printf("pil: steps %lu min %lu mean %lu max %lu max_step %lu compared %lu differ %lu first %ld\n",
-         (unsigned long)steps, (unsigned long)(((uint64_t)ticks_min * BENCH_TICKS_DEN) / BENCH_TICKS_NUM),
-         (unsigned long)((ticks_sum * BENCH_TICKS_DEN) / ((uint64_t)BENCH_TICKS_NUM * (steps ? steps : 1U))),
-         (unsigned long)(((uint64_t)ticks_max * BENCH_TICKS_DEN) / BENCH_TICKS_NUM), (unsigned long)max_step,
-         (unsigned long)compared, (unsigned long)mismatches,
-         (first_diff == UINT32_MAX) ? -1L : (long)first_diff);
-  if (uds_steps > 0U) {
-    printf("pil: uds_steps %lu max %lu max_step %lu\n", (unsigned long)uds_steps,
-           (unsigned long)(((uint64_t)uds_ticks_max * BENCH_TICKS_DEN) / BENCH_TICKS_NUM),
-           (unsigned long)uds_max_step);
+  (void)close(fd);
+  out_kv("pil: steps ", steps);
+  out_kv(" min ", (uint32_t)(((uint64_t)ticks_min * BENCH_TICKS_DEN) / BENCH_TICKS_NUM));
+  out_kv(" mean ", (uint32_t)((ticks_sum * BENCH_TICKS_DEN) / ((uint64_t)BENCH_TICKS_NUM * (steps ? steps : 1U))));
+  out_kv(" max ", (uint32_t)(((uint64_t)ticks_max * BENCH_TICKS_DEN) / BENCH_TICKS_NUM));
+  out_kv(" max_step ", max_step);
+  out_kv(" compared ", compared);
+  out_kv(" differ ", mismatches);
+  if (first_diff == UINT32_MAX) {
+    out_s(" first -1\n");
+  } else {
+    out_kv(" first ", first_diff);
+    out_s("\n");
   }
-  /* exit() ends the emulation through semihosting (returning from main
+  if (uds_steps > 0U) {
+    out_kv("pil: uds_steps ", uds_steps);
+    out_kv(" max ", (uint32_t)(((uint64_t)uds_ticks_max * BENCH_TICKS_DEN) / BENCH_TICKS_NUM));
+    out_kv(" max_step ", uds_max_step);
+    out_s("\n");
+  }
+  {
+    uintptr_t heap_top = (uintptr_t)_sbrk(0);
+    uint32_t *p = paint_lo;
+    bool met;
+    while ((p < paint_hi) && (((uintptr_t)p < heap_top) || (*p == RAM_PAINT))) {
+      p++;
+    }
+    /* a painted word must remain between the heap and the stack */
+    met = ((uintptr_t)p <= heap_top) || (p == paint_lo) || (p[-1] != RAM_PAINT);
+    out_s("pil: ram heap_top ");
+    out_x((uint32_t)heap_top);
+    out_s(" stack_low ");
+    out_x((uint32_t)(uintptr_t)p);
+    out_kv(" free ", met ? 0U : (uint32_t)((uintptr_t)p - heap_top));
+    out_s("\n");
+    if (met) {
+      finish("pil: the stack and the heap met: no RAM left on this machine\n", 3);
+    }
+  }
+  /* _exit() ends the emulation through semihosting (returning from main
    * would idle in Reset_Handler) */
-  exit((mismatches == 0U) ? 0 : 1);
+  finish("", (mismatches == 0U) ? 0 : 1);
 }

@@ -26,8 +26,11 @@ mkdir -p "$work" "$(dirname "$json")"
 results="$work/results.tsv"; : > "$results"
 rlsres="$work/rls.tsv"; : > "$rlsres"
 passed=0; failed=0
+# An image runs a few seconds; one that has not ended after PIL_TIMEOUT
+# seconds hangs (rc 124).
+PIL_TIMEOUT=${PIL_TIMEOUT:-240}
 qemu() { # machine elf -> stdout of the image
-  timeout 600 qemu-system-arm -M "$1" -nographic -icount shift=6 \
+  timeout "$PIL_TIMEOUT" qemu-system-arm -M "$1" -nographic -icount shift=6 \
     -semihosting-config enable=on,target=native -kernel "$2"
 }
 for scn in "$@"; do
@@ -46,11 +49,16 @@ for scn in "$@"; do
       failed=$((failed + 1)); continue
     fi
     read -r _ _ steps _ mn _ mean _ mx _ mxs _ cmp _ diff _ first <<<"$line"
+    ramline=$(grep '^pil: ram' <<<"$out" | tail -1)
+    read -r _ _ _ _ _ _ _ ramfree <<<"$ramline"
+    why="rc $rc"
+    [ "$rc" -eq 124 ] && why="the image did not end within ${PIL_TIMEOUT} s"
+    [ "$rc" -eq 3 ] && why="the stack ran into the heap ($ramline)"
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$mname" "$mcore" "$mqemu" "$steps" \
       "$mn" "$mean" "$mx" "$mxs" "$diff" "$first" >> "$results"
     if [ "$rc" -eq 0 ] && [ "$diff" -eq 0 ] && [ "$cmp" -eq "$steps" ]; then
-      printf 'pil: pass %-18s %-3s %-10s steps %6d  instructions per step min %6d mean %6d max %6d (step %d)\n' \
-        "$name" "$mname" "$mcore" "$steps" "$mn" "$mean" "$mx" "$mxs"
+      printf 'pil: pass %-18s %-3s %-10s steps %6d  instructions per step min %6d mean %6d max %6d (step %d)  RAM never touched %s B\n' \
+        "$name" "$mname" "$mcore" "$steps" "$mn" "$mean" "$mx" "$mxs" "${ramfree:-?}"
       udsline=$(grep '^pil: uds_steps' <<<"$out" | tail -1)
       if [ -n "$udsline" ]; then
         read -r _ _ us _ umx _ umxs <<<"$udsline"
@@ -59,7 +67,7 @@ for scn in "$@"; do
       fi
       passed=$((passed + 1))
     else
-      echo "pil: FAIL $name on $mname ($mcore): $diff of $cmp steps differ from the host build (first: step $first), rc $rc"
+      echo "pil: FAIL $name on $mname ($mcore): $diff of $cmp steps differ from the host build (first: step $first), $why"
       failed=$((failed + 1))
     fi
   done
