@@ -144,7 +144,8 @@ static void stage_test(canfdi_app_t *app)
   t.ref_q16 = IN_VAL(app, CANFDI_RX_IN_SP_THR_ANGLE);
   t.closed_loop = (m->thr_ctrl_mode != CANFDI_CTRL_OFF) && (m->thr_state == CANFDI_DEG_NORMAL);
   t.excited = app->thr.est_on && canfdi_est_thr_excited(&app->est_thr);
-  t.need = (rt != NULL) && rt->detected && rt->not_isolated;
+  t.need = (rt != NULL) && rt->detected && rt->not_isolated &&
+           !canfdi_diagnosis_corr_not_isolated(&app->diagnosis);
   t.unlearnt = app->thr.est_on && !canfdi_est_thr_el_converged(&app->est_thr);
   /* a component's first symptom: its estimator becomes alert (covariance
    * boost), so that the parameter evidence the isolation may need arrives

@@ -14,7 +14,12 @@
  *             usable angle reference in [thr_min, thr_max]: away from the
  *             limp-home band (the spring's kink) and from the stops.
  * Need: the plant's diagnosis shows a symptom it has not isolated yet (the
- * last step's result: the diagnosis runs after the controllers).
+ * last step's result: the diagnosis runs after the controllers). For the
+ * throttle not while the two sensors disagree (CORR, P2135's condition):
+ * only a sensor drift moves CORR (dbc/diag_rules.csv), and the position
+ * residuals that tell TPS1 from TPS2 compare the sensors with the model,
+ * whose error a test burst raises; parameter evidence decides nothing
+ * there.
  * Excited: the plant's estimator was fed this step and its excitation gate
  * applied the last update.
  *

@@ -99,6 +99,12 @@ int32_t canfdi_excite_step_q16(canfdi_excite_t *e)
   int32_t y = 0;
   int32_t prbs = 0;
 
+  if (e->want && !e->sine_on) {
+    /* Switching on while the sine rests: its period starts now (an upward
+     * zero crossing), so a test burst is not delayed by up to a period
+     * waiting for the free-running phase. */
+    e->phase = 0U;
+  }
   if (e->bit_count == 0U) {
     /* A bit edge: the gate may change; the LFSR shifts and its new bit 0
      * is this bit's value. */

@@ -41,11 +41,13 @@
  * 65-entry quarter-wave Q15 table with linear interpolation: error below
  * 1.3e-4 of the amplitude (tested against libm).
  *
- * Enable. The generators run from init on regardless of the enable, so the
- * sequence is a function of time only (reproducible across enables). A
- * change of canfdi_excite_enable takes effect for the PRBS at its next bit
- * edge and for the sinusoid at its next upward zero crossing, so switching
- * never produces a partial bit or a jump of the sine.
+ * Enable. A change of canfdi_excite_enable takes effect for the PRBS at its
+ * next bit edge (the LFSR and its bit clock run from init on regardless of
+ * the enable) and for the sinusoid at an upward zero crossing: when the
+ * sine is off, an enable starts its period in that step, so a test burst
+ * does not wait up to a period for a free-running phase; a disable lets
+ * the running period complete. Switching thus never produces a partial
+ * bit or a jump of the sine.
  *
  * Scaling and overflow. Amplitudes and the output are Q16.16 in the unit of
  * the signal the caller adds it to. The sine sample is Q15 (int32); the
@@ -109,7 +111,8 @@ typedef struct {
  */
 int32_t canfdi_excite_init(canfdi_excite_t *e, const canfdi_excite_cfg_t *cfg);
 
-/* Requests on/off; takes effect at the next bit edge / zero crossing.
+/* Requests on/off: the PRBS at its next bit edge, the sine at once when
+ * it is off and at the end of its period when it runs (see Enable above).
  * Cannot fail by contract. Cost: a store. */
 void canfdi_excite_enable(canfdi_excite_t *e, bool on);
 

@@ -234,25 +234,39 @@ START_TEST(test_sine_output_and_gating)
   for (int k = 0; k < 10; k++) {
     (void)canfdi_excite_step_q16(&e);
   }
+  /* Enabled while the sine is off, mid-period of the free-running phase:
+   * the sine starts at its zero crossing in that step (step 10). */
   canfdi_excite_enable(&e, true);
-  for (int k = 10; k < 50; k++) {
-    ck_assert_int_eq(canfdi_excite_step_q16(&e), 0); /* waits for the crossing */
-  }
-  for (int k = 50; k < 250; k++) {
-    const double ref = 2.0 * sin(TWO_PI * (double)(k - 50) / 50.0);
+  for (int k = 10; k < 210; k++) {
+    const double ref = 2.0 * sin(TWO_PI * (double)(k - 10) / 50.0);
     const double got = (double)canfdi_excite_step_q16(&e) / ONE;
     /* 4 LSB of Q15 on the amplitude, the phase drift of round(2^32/50)
      * over 4 periods (< 1e-8 rad), the output rounding. */
     ck_assert_msg(fabs(got - ref) < 2.0 * 4.0 / 32767.0 + 1e-4, "k %d: %f vs %f", k, got, ref);
     if (k == 130) {
-      canfdi_excite_enable(&e, false); /* finishes the period (to 150) */
+      canfdi_excite_enable(&e, false); /* finishes the period (to 160) */
     }
-    if (k == 149) {
+    if (k == 135) {
+      /* on again while the period runs: no restart, the period goes on */
+      canfdi_excite_enable(&e, true);
+    }
+    if (k == 140) {
+      canfdi_excite_enable(&e, false);
+    }
+    if (k == 159) {
       break;
     }
   }
   ck_assert_int_eq(canfdi_excite_step_q16(&e), 0);
   ck_assert(!canfdi_excite_active(&e));
+  for (int k = 161; k < 173; k++) {
+    ck_assert_int_eq(canfdi_excite_step_q16(&e), 0);
+  }
+  /* from rest again: phase 0 in the step of the enable, then rising */
+  canfdi_excite_enable(&e, true);
+  ck_assert_int_eq(canfdi_excite_step_q16(&e), 0);
+  ck_assert(canfdi_excite_active(&e));
+  ck_assert_int_gt(canfdi_excite_step_q16(&e), 0);
 }
 END_TEST
 
