@@ -570,10 +570,19 @@ static void pthr_observe(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *i
   const bool emf_ok = in->enabled && !s->clip && (pthr_abs(p->i_prev_q16) < c->i_max_A_q16);
   int64_t th_p;
   int64_t w_p;
+  const uint8_t src_prev = p->src;
   pthr_predict(p, s->i_avg, s->di, s->u_app, emf_ok, &th_p, &w_p);
   s->src = pthr_source(p, s->ok1, s->ok2, s->corr, rate);
   p->src = s->src;
-  if ((s->src == CANFDI_PARITY_THR_SRC_NONE) && (s->ok1 || s->ok2) && !emf_ok) {
+  if ((src_prev == CANFDI_PARITY_THR_SRC_MEAN) && (s->src == CANFDI_PARITY_THR_SRC_NONE) && s->ok1 &&
+      s->ok2) {
+    /* Coast entry: start from theta_arm, the jump-robust integral of the
+     * sensor increments (an abrupt offset is outvoted there, a drift moves
+     * it by half the drift, as the mean), not from the observer, whose
+     * error right after a fast stroke can be larger: it decays only with
+     * the position feedback that coasting gives up. */
+    th_p = p->th_arm_q32;
+  } else if ((s->src == CANFDI_PARITY_THR_SRC_NONE) && (s->ok1 || s->ok2) && !emf_ok) {
     /* Coasting without the back-EMF speed (current clipped in a fast
      * stroke, or bridge off): the mechanical model alone is poor there,
      * whereas a sensor offset, even a drifting one, barely changes within

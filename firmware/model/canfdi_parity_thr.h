@@ -70,6 +70,13 @@
  *        NONE  coasting on the model and w_el alone, as soon as the
  *              correlation leaves its band: a disagreeing sensor must not
  *              drag the model towards itself (its half of the mean would).
+ *              The coast starts from theta_arm (below), not from the
+ *              observer: an abrupt offset is outvoted in theta_arm and a
+ *              drift moves it only as it moves the mean, whereas the
+ *              observer's own error just after a fast stroke (up to
+ *              several bands after a 70-deg tip-out) would otherwise stay
+ *              common to POS1 and POS2 for the whole coast, and the
+ *              larger of them is then taken for the drifting sensor.
  *              While w_el is unavailable (current clipped in a fast stroke,
  *              bridge off) the coasting observer follows the jump-robust
  *              sensor increment instead of the mechanical model, which is

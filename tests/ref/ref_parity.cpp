@@ -369,8 +369,13 @@ struct PthrRef {
       thp = th;
       wp = w;
     }
+    const unsigned src_prev = src;
     src = source(ok1, ok2, corr, rate);
-    if (src == CANFDI_PARITY_THR_SRC_NONE && (ok1 || ok2) && !emf_ok) thp = th_hat + inc;
+    if (src_prev == CANFDI_PARITY_THR_SRC_MEAN && src == CANFDI_PARITY_THR_SRC_NONE && ok1 && ok2) {
+      thp = th_arm;
+    } else if (src == CANFDI_PARITY_THR_SRC_NONE && (ok1 || ok2) && !emf_ok) {
+      thp = th_hat + inc;
+    }
     if (src != CANFDI_PARITY_THR_SRC_NONE) {
       const double y = (src == CANFDI_PARITY_THR_SRC_MEAN) ? th_mean : ((src == CANFDI_PARITY_THR_SRC_TPS1) ? th1 : th2);
       const double e = y - thp;
