@@ -1,0 +1,259 @@
+"""Bus faults in HIL (issue 15, item 6): the ECU's interface going down and
+up under the running ECU, error frames and bus-off of a real kernel CAN
+driver (slcan on a pty), the sensor node (canfdi-sim) restarting, a second
+node sending the ECU's own identifiers. In each the ECU keeps its loop,
+names communication faults only, recovers when the bus does and loses no
+stored trouble code.
+
+The rig (busrig.py): canfdi-ecu in lockstep on a bus of its own, its clock
+(SimStep) also on a clock line the faults do not touch, a fault-insertion
+unit that keeps the plant going while the ECU is off the bus. A stored
+code from an earlier operation cycle (P0122, confirmed, in the NVM file)
+is in the memory when each run starts; the memory is read over UDS
+(0x19 0x02) before the fault and after the recovery. What the sandbox
+cannot do, and why, is in tests/hil/README.md.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from busrig import (BENCH, CLOCK, ECU_BUS, ID_ACT_DCM, ID_DIAG, ID_DTC, ID_STATUS, BusLog, Candump, Fiu,
+                    Rig, SlcanAdapter, can_sock, gw, gw_stats, link_up, need_net_admin, pack, read_bus, sh)
+from hilutil import CHANNEL, ECU, OUT, SIM
+
+from canfdi import uds
+from canfdi.hil import start_ecu, start_sim
+
+HERE = Path(__file__).resolve().parent
+BUSFAULT = HERE / "busfault.scn"
+P0122 = 0x012200
+U1A00, U1A01, U1A10, U1A11 = 0xDA0000, 0xDA0100, 0xDA1000, 0xDA1100
+TIMEOUTS = {U1A00, U1A01}
+COMM = {c for c in range(0xDA0000, 0xDA4200, 0x100)}      # U1A00..U1A41, the input supervision's
+TF, TFTOC, PDTC, CDTC = 0x01, 0x02, 0x04, 0x08
+FAIL_SAFE = 2
+
+
+def code(c: int) -> str:
+    letter = "PCBU"[c >> 22]
+    return f"{letter}{(c >> 8) & 0x3FFF:04X}"
+
+
+def codes(cs) -> list[str]:
+    return sorted(code(c) for c in cs)
+
+
+def uds_args() -> argparse.Namespace:
+    return uds.build_parser().parse_args(["-i", "socketcan", "-c", BENCH, "--timeout", "10", "dtc"])
+
+
+def dtc_memory() -> dict[int, int]:
+    """Every code of the ECU's memory with its status byte (0x19 0x02 0xFF)."""
+    with uds.connect(uds_args()) as t:
+        r = uds.check(t.c.get_dtc_by_status_mask(0xFF), "0x19 0x02")
+        return {d.id: d.status.get_byte_as_int() for d in r.service_data.dtcs}
+
+
+def ecu_reset(fiu: Fiu, procs: list, tries: int = 20) -> None:
+    """A new operation cycle: UDS hard reset (extended session). The ECU
+    refuses it (0x22) unless the DC motor and its speed setpoint are at
+    rest: the vehicle's setpoint goes to 0 (a SetpointDcm the sim takes as
+    its override from then on), the drive is off after a fail_safe and the
+    motor coasts down, so ask again every 0.25 s."""
+    s = can_sock(BENCH, [])
+    s.send(pack(0x100, bytes(8)))      # SetpointDcm: speed 0, load 0
+    s.close()
+    for _ in range(tries):
+        with uds.connect(uds_args()) as t:
+            uds.check(t.c.change_session(3), "0x10 0x03")
+            r = t.c.ecu_reset(1)
+        if r.positive:
+            return
+        assert r.code == 0x22, f"ECUReset: NRC 0x{r.code:02X}"
+        fiu.wait_step(fiu.step + 250, procs)
+    pytest.fail(f"ECUReset refused {tries} times (motor not at rest?)")
+
+
+@pytest.fixture(scope="module")
+def stored_nvm() -> Path:
+    """An NVM image whose memory holds P0122 confirmed from an earlier
+    operation cycle (tests/hil/uds_bench.scn: TPS1 open from 1 to 2 s, then
+    healthy), made once on the plain bench."""
+    need_net_admin()
+    nvm = OUT / "busfault-stored.nvm"
+    nvm.unlink(missing_ok=True)
+    gw(False)
+    ecu = start_ecu(ECU, CHANNEL, lockstep=True, nvm=nvm)
+    sim = start_sim(SIM, CHANNEL, HERE / "uds_bench.scn", lockstep=True, extra=("-d", "2.5"))
+    try:
+        assert sim.popen.wait(timeout=120) == 0, sim.tail()
+        assert ecu.stop() == 0, ecu.tail()
+    finally:
+        sim.kill()
+        ecu.kill()
+    return nvm
+
+
+def fresh_nvm(stored: Path, name: str) -> Path:
+    nvm = OUT / f"{name}.nvm"
+    shutil.copyfile(stored, nvm)
+    return nvm
+
+
+def check_memory_kept(before: dict[int, int], after: dict[int, int], new_ok: set[int]) -> None:
+    """No stored code lost; nothing failed this cycle but the expected
+    communication codes."""
+    assert before.get(P0122, 0) & CDTC, f"the stored P0122 is not in the memory: {before}"
+    lost = [code(c) for c, s in before.items() if s & CDTC and not after.get(c, 0) & CDTC]
+    assert lost == [], f"stored codes lost: {lost}"
+    failed = {c for c, s in after.items() if s & (TF | TFTOC)}
+    assert failed <= new_ok, f"failed this cycle besides {codes(new_ok)}: {codes(failed - new_ok)}"
+    changed = {code(c): (f"{before.get(c, 0):#04x}", f"{s:#04x}") for c, s in after.items()
+               if c not in new_ok and s != before.get(c, 0)}
+    assert changed == {}, f"status of other codes changed (before, after): {changed}"
+
+
+def check_comm_only(log: BusLog, allowed: set[int]) -> None:
+    failed = log.failed_codes()
+    assert failed - allowed == set(), f"codes besides {codes(allowed)}: {codes(failed - allowed)}"
+    diag = {(d["DiagDcmFaultId"], d["DiagThrFaultId"]) for _, d in log.diag}
+    assert diag <= {(0, 0)}, f"the diagnosis isolated a plant fault: {diag}"
+
+
+def alive_after(log: BusLog, k: int) -> set[int]:
+    return {s["StsAliveCounter"] for j, s in log.status if j > k}
+
+
+def occurrence(log: BusLog, c: int) -> set[int]:
+    return {d["DtcOccurrence"] for _, d in log.dtc if d["DtcCode"] == c}
+
+
+# ------------------------------------------------------------------ 1
+
+
+def test_interface_down_and_up_under_the_running_ecu(stored_nvm: Path) -> None:
+    """The ECU's interface (vcan1, joined to the bench by cangw) is taken
+    down with `ip link set down` for 1.5 s of simulated time and brought up
+    again while the ECU runs. The ECU keeps stepping on its clock line
+    (every step of the plant, none skipped), its writes fail with ENETDOWN
+    and it goes on; it names only the sensor-frame timeouts U1A00/U1A01
+    (no plant fault), both subsystems go fail_safe and stay so for the
+    operation cycle (the ratchet of firmware/ft/canfdi_degrade.h); once the
+    bus is back its status counter moves again, the timeouts' testFailed
+    clear, and after a UDS reset (a new operation cycle) both subsystems are
+    normal again. The stored P0122 is still confirmed with its occurrence."""
+    need_net_admin()
+    gw(True)
+    rig = Rig("busfault-down-up", ECU_BUS, BUSFAULT, nvm=fresh_nvm(stored_nvm, "busfault-down-up"))
+    try:
+        rig.start()
+        fiu = rig.fiu
+        assert fiu is not None
+        rig.wait_s(1.0)
+        before = dtc_memory()
+        k_cut = fiu.cut(lambda: sh("ip", "link", "set", "down", ECU_BUS))
+        fiu.wait_step(k_cut + 1500, rig.procs)
+        assert not link_up(ECU_BUS)
+        k_back = fiu.restore(lambda: sh("ip", "link", "set", "up", ECU_BUS))
+        fiu.wait_step(k_back + 500, rig.procs)
+        after = dtc_memory()
+        k_after = fiu.step
+        ecu_reset(fiu, rig.procs)
+        k_reset = fiu.step
+        fiu.wait_step(k_reset + 300, rig.procs)
+        log, st = rig.finish()
+    finally:
+        rig.close()
+        gw(False)
+    # the loop: every step of the plant ran once, the outage's included
+    assert st["socket_errors"] > 0, st               # it did see the interface down
+    assert st["lockstep_gaps"] == 0, st
+    assert st["steps"] >= log.steps - 2, (st["steps"], log.steps)
+    assert st["ecu_resets"] == 1, st
+    # communication faults only, named in the outage
+    check_comm_only(log, TIMEOUTS)
+    check_memory_kept(before, after, TIMEOUTS)
+    for c in TIMEOUTS:
+        assert after.get(c, 0) & (TFTOC | CDTC) == TFTOC | CDTC, f"{code(c)} not named: {after.get(c, 0):#x}"
+        assert not after[c] & TF, f"{code(c)} still testFailed after the bus came back: {after[c]:#x}"
+    assert occurrence(log, P0122) == {1}, occurrence(log, P0122)
+    # degradation: fail_safe from the outage, latched for the cycle, normal after the reset
+    assert log.deg_at(k_cut - 5) == (0, 0), log.deg_at(k_cut - 5)
+    assert log.deg_at(k_after) == (FAIL_SAFE, FAIL_SAFE), log.deg_at(k_after)
+    assert log.deg_at(log.steps + 10**9) == (0, 0), log.status[-1]
+    # the ECU speaks again after the bus came back
+    assert len(alive_after(log, k_back)) >= 8, alive_after(log, k_back)
+
+
+def test_interface_down_for_6_s_in_real_time(stored_nvm: Path) -> None:
+    """The same outage with the ECU in its real-time loop (1 ms on
+    CLOCK_MONOTONIC, no lockstep) and longer than the port's 5 s rule for a
+    failing socket: the ECU must not take a down interface for a dead
+    socket (it exited 1 after 5 s of ENETDOWN before this test). It keeps
+    running through 6 s down, sends its status again once the interface is
+    up, keeps the stored P0122 confirmed and exits 0 on SIGTERM.
+
+    What is not judged here: which codes it names. Real time in the
+    sandbox is the host's scheduler (wake-ups up to 100+ ms late under
+    load), which times out the 4 ms sensor frames and disturbs the models
+    in a fault-free run too; the lockstep test above judges the codes."""
+    need_net_admin()
+    gw(True)
+    stats = OUT / "busfault-rt-ecu.json"
+    stats.unlink(missing_ok=True)
+    ecu = start_ecu(ECU, ECU_BUS, lockstep=False, nvm=fresh_nvm(stored_nvm, "busfault-rt"),
+                    extra=("--stats", str(stats)))
+    sim = start_sim(SIM, BENCH, BUSFAULT, lockstep=False, extra=("-d", "60"))
+    mon = can_sock(BENCH, [ID_STATUS], rcvbuf=1 << 20)
+    mon.settimeout(0.5)
+
+    def alive_counters(n: int, within_s: float) -> set[int]:
+        seen: set[int] = set()
+        t_end = time.monotonic() + within_s
+        got = 0
+        while got < n and time.monotonic() < t_end:
+            try:
+                raw = mon.recv(16)
+            except TimeoutError:
+                continue
+            seen.add(raw[8 + 7] & 0x0F)         # StsAliveCounter: bits 56..59
+            got += 1
+        return seen
+
+    try:
+        time.sleep(1.0)
+        assert len(alive_counters(20, 5.0)) > 1, "no EcuStatus before the outage"
+        before = dtc_memory()
+        sh("ip", "link", "set", "down", ECU_BUS)
+        t_down = time.monotonic()
+        while time.monotonic() - t_down < 6.0:
+            assert ecu.poll() is None, f"canfdi-ecu ended with the interface down: {ecu.tail()}"
+            time.sleep(0.1)
+        sh("ip", "link", "set", "up", ECU_BUS)
+        while True:                               # drop what queued before the outage
+            try:
+                mon.recv(16)
+            except TimeoutError:
+                break
+        assert len(alive_counters(20, 10.0)) > 1, "EcuStatus did not come back after the interface was up"
+        after = dtc_memory()
+        assert sim.stop() == 0, sim.tail()
+        assert ecu.poll() is None, ecu.tail()
+        assert ecu.stop() == 0, ecu.tail()
+    finally:
+        sim.kill()
+        ecu.kill()
+        mon.close()
+        gw(False)
+    lost = [code(c) for c, s in before.items() if s & CDTC and not after.get(c, 0) & CDTC]
+    assert lost == [] and after.get(P0122, 0) & CDTC, (before, after)
+    st = json.loads(stats.read_text())
+    assert st["socket_errors"] > 1000, st         # every write of the outage failed, and was survived
+    assert any("works again" in ln for ln in ecu.lines), ecu.lines
