@@ -387,7 +387,7 @@ class Candump:
         self.path = path
         path.unlink(missing_ok=True)
         self.f = path.open("w")
-        args = ["candump", "-L", "-r", str(8 << 20)] + (["-e"] if errors else [])
+        args = ["candump", "-L", "-r", str(8 << 20)]
         self.p = subprocess.Popen(args + [ifname + (",0:0,#FFFFFFFF" if errors else "")],
                                   stdout=self.f, stderr=subprocess.DEVNULL)
 
