@@ -92,12 +92,14 @@ def need_net_admin() -> None:
             sh("ip", "link", "set", "up", ifn)
 
 
-def gw(on: bool) -> None:
+def gw(on: bool, clock_by_fiu: bool = False) -> None:
     """cangw rules between the bench and the ECU's vcan1, both ways, with
-    local echo so that every socket on the far side sees the frame."""
+    local echo so that every socket on the far side sees the frame;
+    clock_by_fiu: SimStep does not pass (the Fiu relays it, mode relay)."""
     sh("cangw", "-F")
     if on:
-        sh("cangw", "-A", "-s", BENCH, "-d", ECU_BUS, "-e")
+        flt = ["-f", f"{ID_STEP:03X}~7FF"] if clock_by_fiu else []
+        sh("cangw", "-A", "-s", BENCH, "-d", ECU_BUS, "-e", *flt)
         sh("cangw", "-A", "-s", ECU_BUS, "-d", BENCH, "-e")
 
 
@@ -140,7 +142,11 @@ class Fiu(threading.Thread):
     cut:  for every SimStep(k) of the plant, ticks the ECU with SimStep(k)
           on the clock line and sends the plant the ECU's last actuator
           frames (held);
-    hold: lets the next SimStep go unanswered: the bench stops there.
+    hold: lets the next SimStep go unanswered: the bench stops there;
+    relay: a restarted plant counts its steps from 0 again, which the ECU
+          ignores as stale: every SimStep(j) is passed on as a tick
+          SimStep(j + offset) on the clock line (after its frames, which
+          the ECU handles first).
     """
 
     def __init__(self, bench: str = BENCH, clock: str = CLOCK) -> None:
@@ -156,6 +162,9 @@ class Fiu(threading.Thread):
         self.last_act: dict[int, bytes] = {}
         self.t_last = time.monotonic()
         self.held_at = -1
+        self.offset = 0
+        self.last_tick = -1
+        self.hold_when: Callable[[int], bool] | None = None
         self.ticks = 0                  # clock ticks sent
         self.supplied = 0               # held actuator frames sent
         self.error: BaseException | None = None
@@ -177,6 +186,13 @@ class Fiu(threading.Thread):
                         if self.mode == "cut":
                             self._tick(self.step)
                             self._supply(set(ACTUATORS))
+                        elif self.mode == "relay":
+                            if self.hold_when is not None and self.hold_when(self.step):
+                                self.mode = "hold"
+                                self.held_at = self.step
+                                self.held_evt.set()
+                            else:
+                                self._tick(self.step + self.offset)
                         elif self.mode == "hold":
                             self.held_at = self.step
                             self.held_evt.set()
@@ -189,6 +205,27 @@ class Fiu(threading.Thread):
     def _tick(self, k: int) -> None:
         self.clk.send(pack(ID_STEP, k.to_bytes(4, "little") + bytes(4)))
         self.ticks += 1
+        self.last_tick = k
+
+    def free_run(self, first: int, n: int) -> int:
+        """With no plant on the bus: tick the ECU n times from step `first`,
+        one a millisecond. Returns the last step ticked."""
+        for k in range(first, first + n):
+            with self.lock:
+                self._tick(k)
+            time.sleep(0.001)
+        return first + n - 1
+
+    def relay(self, offset: int, hold_when: Callable[[int], bool] | None = None) -> None:
+        """Relay the plant's SimStep(j) as tick j + offset; hold (the bench
+        stops, the step not ticked) at the first j for which hold_when(j)."""
+        with self.lock:
+            self.mode = "relay"
+            self.offset = offset
+            self.hold_when = hold_when
+            self.held_evt.clear()
+            self.step = -1
+            self.after = set()
 
     def _supply(self, ids: set[int]) -> None:
         # sent on the watching socket: its own frames do not come back to it
@@ -425,9 +462,13 @@ class Rig:
         self.stats = OUT / f"{self.name}-ecu.json"
         self.stats.unlink(missing_ok=True)
 
-    def start(self) -> "Rig":
+    def start(self, relay: bool = False) -> "Rig":
+        """relay: the ECU's clock comes from the Fiu only (with gw(True,
+        clock_by_fiu=True))."""
         self.dump = Candump(BENCH, OUT / f"{self.name}.log")
         self.fiu = Fiu()
+        if relay:
+            self.fiu.relay(0)
         self.ecu = start_ecu(ECU, self.ecu_iface, lockstep=True, nvm=self.nvm,
                              extra=("--clock", CLOCK, "--stats", str(self.stats), *self.extra_ecu))
         self.sim = start_sim(SIM, BENCH, self.scenario, lockstep=True,

@@ -346,3 +346,61 @@ def test_error_frames_and_bus_off_on_slcan(stored_nvm: Path) -> None:
         assert after.get(c, 0) & (TFTOC | CDTC) == TFTOC | CDTC and not after[c] & TF, f"{code(c)}: {after.get(c, 0):#x}"
     assert log.deg_at(k_cut - 5) == (0, 0) and log.deg_at(k_after) == (FAIL_SAFE, FAIL_SAFE), log.status[-1]
     assert len(alive_after(log, k_back)) >= 4, alive_after(log, k_back)   # EcuStatus every 100 ms
+
+
+# ------------------------------------------------------------------ 3
+
+
+@pytest.mark.parametrize("gap_ms", [0, 300])
+def test_sensor_node_restarts(stored_nvm: Path, gap_ms: int) -> None:
+    """The sensor node (canfdi-sim: the plant's sensor frames) dies with
+    SIGKILL mid-run and a new one starts after gap_ms of simulated time,
+    during which the ECU's own clock goes on (busrig.Fiu.free_run). The new
+    node starts from its power-up state: E2E counters from 0, the plant at
+    rest, the scenario from its beginning. The ECU's clock is relayed by
+    the Fiu all along, so the node dies at a chosen step: one whose counter
+    (the step modulo 16) is 8, so that the restart's jump to 0 is a wrong
+    sequence (a jump of up to 2 is one or no lost frame and accepted by
+    design). With no gap the ECU meets that counter discontinuity, with
+    300 ms a timeout first: either way it names communication codes of the
+    input supervision only (U1Axx), keeps stepping, heals them once the new
+    node's frames flow, and keeps the stored P0122."""
+    need_net_admin()
+    gw(True, clock_by_fiu=True)
+    name = f"busfault-restart-{gap_ms}"
+    rig = Rig(name, ECU_BUS, BUSFAULT, nvm=fresh_nvm(stored_nvm, name))
+    try:
+        rig.start(relay=True)
+        fiu = rig.fiu
+        assert fiu is not None and rig.sim is not None
+        rig.wait_s(1.0)
+        before = dtc_memory()
+        k0 = fiu.step
+        fiu.relay(0, hold_when=lambda j: j > k0 + 20 and j % 16 == 8)
+        assert fiu.held_evt.wait(60), "the bench did not reach the step to stop at"
+        k_dead = fiu.held_at
+        rig.sim.kill()                                  # SIGKILL: the node is gone at once
+        fiu.settle()
+        last = fiu.free_run(k_dead, 1 + gap_ms)         # step k_dead with its frames, then the gap
+        fiu.relay(last + 1)
+        rig.sim = start_sim(SIM, BENCH, BUSFAULT, lockstep=True, extra=("-d", "120", "--ecu-timeout", "60"))
+        fiu.wait_step(1000, rig.procs)                  # the new node's steps
+        after = dtc_memory()
+        log, st = rig.finish()
+    finally:
+        rig.close()
+        gw(False)
+    k_new = last + 1
+    named = log.failed_codes()
+    if gap_ms:
+        assert TIMEOUTS <= named, f"the 300 ms without sensor frames named {codes(named)}"
+    else:
+        # the counters jump from 8 back to 0: the first frame of each is
+        # rejected (a wrong sequence), the next ones resynchronise
+        assert st["frames_rejected"] >= 2, st
+    check_comm_only(log, COMM)
+    check_memory_kept(before, after, COMM)
+    assert not {c for c, s in after.items() if s & TF}, f"still failed: {codes(c for c, s in after.items() if s & TF)}"
+    assert st["lockstep_gaps"] == 0, st
+    assert st["steps"] >= k_new + 1000 - 2, (st["steps"], k_new)
+    assert len(alive_after(log, -1)) >= 8
