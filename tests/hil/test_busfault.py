@@ -25,8 +25,8 @@ from pathlib import Path
 
 import pytest
 
-from busrig import (BENCH, CLOCK, ECU_BUS, ID_ACT_DCM, ID_DIAG, ID_DTC, ID_STATUS, BusLog, Candump, Fiu,
-                    Rig, SlcanAdapter, can_sock, gw, gw_stats, link_up, need_net_admin, pack, read_bus, sh)
+from busrig import (BENCH, ECU_BUS, ID_ACT_DCM, ID_DIAG, ID_DTC, ID_STATUS, BusLog, Candump, Fiu, Rig,
+                    SlcanAdapter, can_sock, gw, link_up, need_net_admin, pack, read_bus, sh)
 from hilutil import CHANNEL, ECU, OUT, SIM
 
 from canfdi import uds
@@ -35,7 +35,7 @@ from canfdi.hil import start_ecu, start_sim
 HERE = Path(__file__).resolve().parent
 BUSFAULT = HERE / "busfault.scn"
 P0122 = 0x012200
-U1A00, U1A01, U1A10, U1A11 = 0xDA0000, 0xDA0100, 0xDA1000, 0xDA1100
+U1A00, U1A01 = 0xDA0000, 0xDA0100
 TIMEOUTS = {U1A00, U1A01}
 COMM = {c for c in range(0xDA0000, 0xDA4200, 0x100)}      # U1A00..U1A41, the input supervision's
 TF, TFTOC, PDTC, CDTC = 0x01, 0x02, 0x04, 0x08
