@@ -29,7 +29,9 @@ BENCH_STEPS += bench-hil
 
 # The HIL tests: one pytest inside one sandbox (starting Python there costs
 # seconds): tests/hil (scenarios shared with SIL, bit-identity with SIL,
-# raw frames from can-utils, floods, live tools, NVM across restarts) and
+# raw frames from can-utils, floods, live tools, NVM across restarts, bus
+# faults: interface down/up, slcan error frames and bus-off, sensor node
+# restart, forged ECU identifiers; tests/hil/README.md) and
 # the vcan tests of tests/sim (canfdi-sim's lockstep protocol).
 # CANFDI_HIL_REQUIRED=1: a missing vcan0 fails instead of skipping.
 # The SIL twins of the scenarios tests/hil/test_scenarios.py compares frame

@@ -20,6 +20,10 @@ void canfdi_ecu_usage(FILE *f)
           "  --lockstep           step on SimStep frames (0x611) of canfdi-sim --lockstep;\n"
           "                       the ECU's frames are then bit-identical to SIL\n"
           "  --realtime           a step every 1 ms of CLOCK_MONOTONIC (the default)\n"
+          "  --clock IFACE        lockstep: also take SimStep from IFACE, a clock line\n"
+          "                       apart from the bus, so that the bus interface can go\n"
+          "                       down (or bus-off) while the ECU keeps stepping; the\n"
+          "                       bus's frames are always handled before a tick\n"
           "  --nvm FILE           keep the DTC memory in FILE (created if missing): loaded\n"
           "                       at start, stored at exit and every 10 s when changed\n"
           "  --duration S         stop after S seconds (default: run until SIGINT/SIGTERM)\n"
@@ -31,7 +35,8 @@ void canfdi_ecu_usage(FILE *f)
           "Prints '" CANFDI_ECU_PROG ": ready on IFACE (lockstep|realtime)' on stderr once the\n"
           "socket is bound. SIGINT/SIGTERM: finish the step, store NVM, write stats,\n"
           "exit 0. Exit 1: runtime failure (no interface, NVM file unusable, socket\n"
-          "failing for 5 s); 2: bad usage.\n"
+          "failing for 5 s; a down interface is not a failure: the ECU keeps stepping\n"
+          "and names the lost frames); 2: bad usage.\n"
           "\n"
           "examples:\n"
           "  " CANFDI_ECU_PROG " -c vcan0                       realtime, until Ctrl-C\n"
@@ -77,7 +82,7 @@ static bool parse_seconds(const char *s, int64_t *ns)
 
 int canfdi_ecu_parse_args(int argc, char **argv, canfdi_ecu_opts_t *o)
 {
-  enum { OPT_LOCKSTEP = 256, OPT_REALTIME, OPT_NVM, OPT_DURATION, OPT_STATS };
+  enum { OPT_LOCKSTEP = 256, OPT_REALTIME, OPT_NVM, OPT_DURATION, OPT_STATS, OPT_CLOCK };
   static const struct option opts[] = {
       {"channel", required_argument, NULL, 'c'},
       {"lockstep", no_argument, NULL, OPT_LOCKSTEP},
@@ -85,6 +90,7 @@ int canfdi_ecu_parse_args(int argc, char **argv, canfdi_ecu_opts_t *o)
       {"nvm", required_argument, NULL, OPT_NVM},
       {"duration", required_argument, NULL, OPT_DURATION},
       {"stats", required_argument, NULL, OPT_STATS},
+      {"clock", required_argument, NULL, OPT_CLOCK},
       {"quiet", no_argument, NULL, 'q'},
       {"help", no_argument, NULL, 'h'},
       {NULL, 0, NULL, 0},
@@ -116,6 +122,9 @@ int canfdi_ecu_parse_args(int argc, char **argv, canfdi_ecu_opts_t *o)
     case OPT_STATS:
       o->stats_path = optarg;
       break;
+    case OPT_CLOCK:
+      o->clock_iface = optarg;
+      break;
     case 'q':
       o->quiet = true;
       break;
@@ -134,6 +143,12 @@ int canfdi_ecu_parse_args(int argc, char **argv, canfdi_ecu_opts_t *o)
   }
   if ((o->iface[0] == '\0') || (strlen(o->iface) >= 16U)) {
     fprintf(stderr, CANFDI_ECU_PROG ": bad interface name '%s'\n", o->iface);
+    return CANFDI_ECU_ARGS_USAGE;
+  }
+  if ((o->clock_iface != NULL) &&
+      (!o->lockstep || (o->clock_iface[0] == '\0') || (strlen(o->clock_iface) >= 16U))) {
+    fprintf(stderr, CANFDI_ECU_PROG ": --clock wants --lockstep and an interface name, got '%s'\n",
+            o->clock_iface);
     return CANFDI_ECU_ARGS_USAGE;
   }
   return CANFDI_ECU_ARGS_RUN;

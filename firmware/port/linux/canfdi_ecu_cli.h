@@ -16,6 +16,7 @@ typedef struct {
   const char *iface;      /* CAN interface (default $CAN_CHANNEL, else vcan0) */
   const char *nvm_path;   /* --nvm FILE or NULL */
   const char *stats_path; /* --stats FILE.json or NULL */
+  const char *clock_iface; /* --clock IFACE (lockstep: SimStep also from IFACE) or NULL */
   int64_t duration_ns;    /* --duration; 0: until signalled */
   bool lockstep;          /* --lockstep (default realtime) */
   bool quiet;             /* -q */

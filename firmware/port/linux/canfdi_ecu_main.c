@@ -27,6 +27,15 @@
  * k > last_k + 1: counted (lockstep_gaps), then stepped. No timing reaches
  * the app, so the ECU's frames are bit-identical to SIL.
  *
+ * Clock line (--clock IFACE, lockstep only): SimStep frames are also read
+ * from a second socket on IFACE (filtered to 0x611). A rig that takes the
+ * bus interface down, or a controller bus-off, keeps the ECU stepping
+ * through that line, as a real ECU's own clock would (tests/hil/
+ * test_busfault.py). Before each tick from the clock line every frame
+ * waiting on the bus socket is handled, so a frame sent before the tick
+ * is seen in the step it belongs to; a tick that arrived on both paths
+ * runs once (the second is stale, counted).
+ *
  * ECUReset (UDS 0x11 answered, canfdi_app_reset_requested after a step's
  * frames left): the application is powered down and up again with its
  * image (canfdi_ecu_nvm_restart), as a hard reset of the ECU would; the
@@ -41,7 +50,12 @@
  * input supervision judges them (the kernel filter passes only the ids the
  * ECU consumes); a SimStep of the wrong length is counted and ignored;
  * socket errors are counted and reported; only errors with no successful
- * socket I/O for 5 s end the process (exit 1).
+ * socket I/O for 5 s end the process (exit 1). ENETDOWN is not such an
+ * error: the interface is down (`ip link set down`, a driver closing it
+ * after bus-off), the socket stays bound and works again when it comes
+ * up, so the loop goes on stepping and the input supervision names the
+ * frames that stopped (U1A00/U1A01), as a controller off the bus would;
+ * the first error of an outage and the return of good I/O are reported.
  *
  * Identifiers in the kernel filter: DcmSensor 0x010, ThrSensor 0x011,
  * SetpointDcm 0x100, SetpointThr 0x101, SimStep 0x611, and the UDS requests
@@ -108,6 +122,7 @@ typedef struct {
 static canfdi_app_t app;
 static ecu_t ecu;
 static canfdi_socketcan_t sock;
+static canfdi_socketcan_t clock_sock; /* --clock: SimStep only; fd -1 without */
 static canfdi_ecu_hist_t step_hist;
 static canfdi_ecu_hist_t lat_hist;
 static canfdi_ecu_nvm_t nvm;
@@ -145,14 +160,21 @@ static uint32_t ns_to_us_u32(int64_t ns)
 
 static void sock_ok(int64_t now)
 {
+  if ((ecu.last_errno != 0) && !ecu.opt.quiet) {
+    fprintf(stderr, PROG ": %s works again (%" PRIu64 " socket errors so far)\n", ecu.opt.iface,
+            ecu.n.socket_errors);
+  }
   ecu.last_ok_ns = now;
   ecu.errors_since_ok = 0U;
+  ecu.last_errno = 0;
 }
 
 static void sock_error(int err)
 {
   ecu.n.socket_errors++;
-  ecu.errors_since_ok = (ecu.errors_since_ok < UINT32_MAX) ? (ecu.errors_since_ok + 1U) : UINT32_MAX;
+  if (err != ENETDOWN) { /* a down interface is a bus condition, never fatal */
+    ecu.errors_since_ok = (ecu.errors_since_ok < UINT32_MAX) ? (ecu.errors_since_ok + 1U) : UINT32_MAX;
+  }
   if ((ecu.last_errno != err) && !ecu.opt.quiet) {
     fprintf(stderr, PROG ": socket error on %s: %s (counted; going on)\n", ecu.opt.iface, strerror(err));
   }
@@ -353,18 +375,46 @@ static int run_realtime(void)
   return (rc < 0) ? 0 : rc;
 }
 
+/* --clock: the ticks waiting on the clock line, each after the bus's
+ * frames that arrived before it. */
+static void drain_clock(void)
+{
+  canfdi_socketcan_frame_t f;
+  int rc;
+  do {
+    (void)drain(UINT32_MAX);
+    rc = canfdi_socketcan_recv(&clock_sock, &f);
+    if (rc == 1) {
+      sock_ok(mono_ns());
+      if (f.id == CANFDI_MSG_SIM_STEP_FRAME_ID) {
+        simstep_frame(&f);
+      }
+    } else if (rc < 0) {
+      sock_error(-rc);
+    } else {
+      /* nothing more */
+    }
+  } while ((rc == 1) && (stop_signal == 0));
+}
+
 static int run_lockstep(void)
 {
-  struct pollfd pfd;
+  struct pollfd pfd[2];
+  const nfds_t nfd = (clock_sock.fd >= 0) ? 2U : 1U;
   int rc = -1;
-  pfd.fd = sock.fd;
-  pfd.events = POLLIN;
+  pfd[0].fd = sock.fd;
+  pfd[0].events = POLLIN;
+  pfd[1].fd = clock_sock.fd;
+  pfd[1].events = POLLIN;
   sock.tx_budget_us = LOCKSTEP_TX_BUDGET_US;
   while ((stop_signal == 0) && (rc < 0)) {
-    const int r = poll(&pfd, 1U, 100);
+    const int r = poll(pfd, nfd, 100);
     int64_t now;
     if (r > 0) {
       (void)drain(UINT32_MAX);
+      if (nfd == 2U) {
+        drain_clock();
+      }
     }
     now = mono_ns();
     canfdi_ecu_nvm_maybe_store(&nvm, &app, now);
@@ -446,6 +496,17 @@ int main(int argc, char **argv)
     (void)canfdi_ecu_nvm_finish(&nvm, &app, false);
     return 1;
   }
+  clock_sock.fd = -1;
+  if (ecu.opt.clock_iface != NULL) {
+    static const uint32_t clock_ids[] = {CANFDI_MSG_SIM_STEP_FRAME_ID};
+    rc = canfdi_socketcan_open(&clock_sock, ecu.opt.clock_iface, clock_ids, 1U);
+    if (rc != 0) {
+      fprintf(stderr, PROG ": cannot open the clock line %s: %s\n", ecu.opt.clock_iface, strerror(-rc));
+      canfdi_socketcan_close(&sock);
+      (void)canfdi_ecu_nvm_finish(&nvm, &app, false);
+      return 1;
+    }
+  }
   /* time starts now: step 1 is 1 ms after the ready line */
   ecu.t0_ns = mono_ns();
   ecu.last_ok_ns = ecu.t0_ns;
@@ -471,6 +532,7 @@ int main(int argc, char **argv)
   if (!ecu.opt.quiet) {
     summary();
   }
+  canfdi_socketcan_close(&clock_sock);
   canfdi_socketcan_close(&sock);
   return (rc != 0) ? rc : rc_nvm;
 }

@@ -26,7 +26,9 @@
  * is dropped and counted (diag.tx_drops): the 1 ms loop never blocks for
  * long. Other errors (ENETDOWN: the interface is down; ENXIO/ENODEV: it
  * disappeared) are counted and returned at once; the caller decides when
- * they become fatal (canfdi-ecu: errors with no successful I/O for 5 s).
+ * they become fatal (canfdi-ecu: errors other than ENETDOWN with no
+ * successful I/O for 5 s; a down interface keeps the socket bound and
+ * works again when it is up).
  *
  * Cost: one system call per received or sent frame (recvmsg / write), plus
  * the retries above. Memory: the instance (~80 bytes); no heap.
