@@ -431,6 +431,9 @@ def _print_quality(report: Report, i: int, bitrate: int, out: IO[str]) -> None:
         bad = {k: v for k, v in rej.items() if v}
         if bad:
             parts.append(f"{name} " + ", ".join(f"{k} {v}" for k, v in bad.items()))
+    if dq.get("recorded_ecu_dtc_frames_failing_e2e"):
+        parts.append(f"{dq['recorded_ecu_dtc_frames_failing_e2e']} recorded EcuDtc frame(s) forged or corrupted "
+                     f"(E2E check failed; not taken as the recorded ECU's)")
     for key, label in (("error_frames", "error frames"), ("fd_frames", "CAN FD frames (not fed)"),
                        ("remote_frames", "remote frames"), ("extended_frames", "29-bit frames")):
         if dq[key]:
