@@ -4,14 +4,8 @@
  */
 #include "app/canfdi_app_out.h"
 
-#include "comm/gen/canfdi_raw_limits.h"
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
-
-/* EcuDtc carries a DTC's index among the stored ones in 5 bits (the E2E
- * header took the room): a larger catalogue needs a new frame layout. */
-CANFDI_STATIC_ASSERT(CANFDI_CFG_DTC_MAX_DTCS <= (CANFDI_RAW_ECU_DTC_DTC_INDEX_MAX + 1U),
-                     out_dtc_index_fits_ecu_dtc);
 
 #define TX_DUE(due, f) (((due) & (1U << (f))) != 0U)
 

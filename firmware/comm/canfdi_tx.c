@@ -3,6 +3,7 @@
  */
 #include "comm/canfdi_tx.h"
 
+#include "catalogue/canfdi_catalogue.h"
 #include "comm/gen/canfdi_msg.h"
 #include "comm/gen/canfdi_raw_limits.h"
 #include "comm/gen/canfdi_sig_conv.h"
@@ -24,6 +25,9 @@ CANFDI_STATIC_ASSERT(PERIOD_STEPS(CANFDI_MSG_ECU_PARAM_THR_CYCLE_TIME_MS) <= 255
                      tx_period_fits_countdown);
 CANFDI_STATIC_ASSERT(CANFDI_CFG_TX_DTC_QUEUE >= 1U && CANFDI_CFG_TX_DTC_QUEUE <= 255U,
                      tx_queue_size);
+/* EcuDtc carries a DTC's index among the stored ones in 5 bits (the E2E
+ * header took the room): a larger catalogue needs a new frame layout. */
+CANFDI_STATIC_ASSERT(CANFDI_DTC_COUNT <= (CANFDI_RAW_ECU_DTC_DTC_INDEX_MAX + 1U), tx_dtc_index_fits_ecu_dtc);
 
 typedef struct {
   uint8_t period; /* steps */
