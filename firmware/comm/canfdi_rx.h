@@ -155,7 +155,7 @@
  * A 1 ms cycle with both sensor frames (and a setpoint every 10 ms) costs
  * about 2000 (M4) / 2900 (M0+) instructions. No division anywhere; 64-bit
  * multiplies call __aeabi_lmul on M0+.
- * Memory: sizeof(canfdi_rx_t) = 800 bytes on a 32-bit target (204 of them
+ * Memory: sizeof(canfdi_rx_t) = 804 bytes on Cortex-M (204 of them
  * the diagnostics, 176 the four E2E receivers with their counters); code
  * 2.9 kB (-Os, M0+ and M4); stack: canfdi_rx_frame 48 + 88 bytes plus the
  * E2E check and the generated unpack (-fstack-usage). No heap, no

@@ -72,7 +72,7 @@
  *   with a 10/100 ms frame and/or event    701 / 856 / 1078   1116 / 1426 / 1856
  * Per actuator frame about 300 (M4) / 450 (M0+): one 64-bit conversion
  * (__aeabi_lmul on M0+), the generated pack and the E2E CRC over 9 bytes.
- * Memory: sizeof(canfdi_tx_t) = 164 bytes on a 32-bit target with the
+ * Memory: sizeof(canfdi_tx_t) = 168 bytes on Cortex-M with the
  * default 8-entry DTC event queue (8 bytes per entry); the caller's frame
  * buffer 4 x 16 bytes; code 2.7 kB (-Os); stack <= 48 bytes per encoder
  * plus the generated pack and the E2E protect (-fstack-usage). The E2E
