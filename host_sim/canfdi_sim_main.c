@@ -75,7 +75,7 @@ static void usage(FILE *out)
           "\n"
           "On SocketCAN (--can IFACE): the plant and vehicle of a HIL bench against the\n"
           "firmware ECU (canfdi-ecu) on IFACE. Each 1 ms step sends SetpointDcm/Thr\n"
-          "(every 10 ms), DcmSensor, ThrSensor and SimPlantStatus, applies the ECU's\n"
+          "(every 10 ms, E2E-protected), DcmSensor, ThrSensor and SimPlantStatus, applies the ECU's\n"
           "DcmActuator/ThrActuator, and obeys SimFaultInject/SimFaultClear (fault from\n"
           "now + InjStartDelay) and external SetpointDcm/SetpointThr (they override the\n"
           "scenario's setpoints and load from then on; the sim keeps sending them).\n"

@@ -22,6 +22,8 @@ int canfdi_sim_rig_init(canfdi_sim_rig_t *r, canfdi_sim_scn_t *scn, canfdi_sim_t
     r->dcm_supply_V = sim->dcm.p.supply_V;
     r->thr_supply_V = sim->thr.p.supply_V;
     canfdi_sim_frames_init(&r->frames, sim_mode);
+    canfdi_e2e_tx_init(&r->sp_e2e[0], (uint16_t)CANFDI_SIM_MSG_SETPOINT_DCM_FRAME_ID);
+    canfdi_e2e_tx_init(&r->sp_e2e[1], (uint16_t)CANFDI_SIM_MSG_SETPOINT_THR_FRAME_ID);
   }
   return rc;
 }
@@ -61,12 +63,18 @@ size_t canfdi_sim_rig_begin(canfdi_sim_rig_t *r, canfdi_sim_frame_t *out)
                                   : canfdi_sim_msg_setpoint_dcm_sp_dcm_speed_encode(r->sp.speed_rad_s);
     spd.sp_dcm_load = r->ovr_dcm ? r->ovr_load_raw
                                  : canfdi_sim_msg_setpoint_dcm_sp_dcm_load_encode(r->sp.load_Nm);
+    spd.setpoint_dcm_crc = 0U;
+    spd.setpoint_dcm_counter = 0U;
     (void)canfdi_sim_msg_setpoint_dcm_pack(d, &spd, sizeof d);
+    (void)canfdi_e2e_protect(&r->sp_e2e[0], d, sizeof d);
     put(out, &n, CANFDI_SIM_MSG_SETPOINT_DCM_FRAME_ID, d);
     memset(d, 0, sizeof d);
     spt.sp_thr_angle = r->ovr_thr ? r->ovr_angle_raw
                                   : canfdi_sim_msg_setpoint_thr_sp_thr_angle_encode(r->sp.angle_deg);
+    spt.setpoint_thr_crc = 0U;
+    spt.setpoint_thr_counter = 0U;
     (void)canfdi_sim_msg_setpoint_thr_pack(d, &spt, sizeof d);
+    (void)canfdi_e2e_protect(&r->sp_e2e[1], d, sizeof d);
     put(out, &n, CANFDI_SIM_MSG_SETPOINT_THR_FRAME_ID, d);
   }
   n += canfdi_sim_frames_build(&r->frames, r->sim, &r->in, &out[n]);

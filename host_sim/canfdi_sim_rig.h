@@ -8,7 +8,9 @@
  *   canfdi_sim_rig_begin   evaluates the scenario at t_k; every
  *                          CANFDI_SIM_RIG_SETPOINT_PERIOD_STEPS steps the
  *                          vehicle's SetpointDcm (speed + known load) and
- *                          SetpointThr; then the plant's frames of the sample
+ *                          SetpointThr, E2E protected (counter +1 per frame,
+ *                          CRC over the data ID 0x100 / 0x101 and bytes
+ *                          1..7, comm/canfdi_e2e.h); then the plant's frames of the sample
  *                          at t_k (canfdi_sim_frames_build: DcmSensor,
  *                          ThrSensor — damaged by comm faults — and
  *                          SimPlantStatus when due). The caller puts them on
@@ -21,9 +23,11 @@
  *                          fault id (0: every fault, the scenario's too);
  *                          an external SetpointDcm / SetpointThr overrides
  *                          the scenario's values from then on: the rig keeps
- *                          sending the override (the same raw signal values)
- *                          every 10 ms, and its SpDcmLoad becomes the plant
- *                          load. Other ids are counted and ignored.
+ *                          sending the override (the same raw signal values,
+ *                          in its own E2E sequence) every 10 ms, and its
+ *                          SpDcmLoad becomes the plant load. The override's
+ *                          CRC and counter are not checked (a test bench's
+ *                          command). Other ids are counted and ignored.
  *   canfdi_sim_rig_end     plant load = the step's load (scenario or
  *                          override), the plants' supplies = the scenario's
  *                          at t_k (canfdi_sim_scn_supply; not overridable),
@@ -45,7 +49,7 @@
  *
  * Determinism: with the same scenario and the same received frames at the
  * same steps, the frames sent are bit-identical.
- * Cost: _begin is one scenario evaluation plus up to five packs and two
+ * Cost: _begin is one scenario evaluation plus up to five packs and four
  * CRCs; _rx one unpack; _end one canfdi_sim_step (canfdi_sim.h).
  * Memory: sizeof(canfdi_sim_rig_t) ~ 200 bytes; the scenario and the plant
  * are the caller's and must outlive the rig. No heap.
@@ -99,6 +103,7 @@ typedef struct {
   canfdi_sim_scn_t *scn;           /* borrowed: setpoint profiles */
   canfdi_sim_t *sim;               /* borrowed: the plant */
   canfdi_sim_frames_t frames;      /* E2E state of the sensor frames */
+  canfdi_e2e_tx_t sp_e2e[2];       /* E2E state of SetpointDcm, SetpointThr */
   canfdi_sim_in_t in;              /* actuator inputs in force (and the load of this step) */
   canfdi_sim_trace_sp_t sp;        /* setpoints and load of this step (after overrides) */
   double dcm_supply_V;             /* the plants' supplies over this step (scenario) */

@@ -77,6 +77,14 @@
  * freeze frames, the degradation records) use the uptime in ms kept from
  * it (core/canfdi_uptime.h), right for years.
  *
+ * Setpoints (docs/design.md, "Setpoint supervision"): the vehicle's
+ * SetpointDcm / SetpointThr are E2E protected and judged by canfdi_rx like
+ * the sensor frames; while one is in error the last accepted value is
+ * used (SUBSTITUTED, at most 50 ms after its acceptance), then (INVALID)
+ * the speed reference is 0 (the motor braked to standstill) and the
+ * position reference cal.ctrl_thr.limp_home_rad_q16; U1A50 (timeout) or
+ * U1A51 (rejected frames); no degradation state changes.
+ *
  * Load: the firmware has no torque sensor; the vehicle sends the load it
  * knows it applies with the speed setpoint (SpDcmLoad). It is the parity
  * equations' load input, the estimator's known load offset (relative to
@@ -134,10 +142,10 @@
  * ~2x the M4 count, so 24 000 there needs the base cost (today >= 52 000)
  * more than halved, not only spread.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
- * all of the application's RAM, static: 11 136 bytes on Cortex-M (740 of
+ * all of the application's RAM, static: 11 272 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 636 B and 1 960 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 784 B and 1 960 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H

@@ -25,12 +25,12 @@
  * Scaling and overflow: values pass through as Q16.16 SI; canfdi_tx
  * saturates them to the DBC's ranges. Q8.24 estimates are converted with
  * canfdi_qconv_s32 (saturating). Counters saturate.
- * Cost per step: a status read per DTC (30) for the change detection, plus
- * the frame due: a DTC count (30 status reads) for EcuStatus, a pass over
+ * Cost per step: a status read per DTC (32) for the change detection, plus
+ * the frame due: a DTC count (32 status reads) for EcuStatus, a pass over
  * the DTCs and one record read for the cyclic EcuDtc, two isolated-fault
  * reads for EcuDiagnosis; then canfdi_tx_step.
  * Memory: sizeof(canfdi_app_out_t) = 56 bytes on a 32-bit target with the
- * product's 30 DTCs. No heap.
+ * product's 32 DTCs. No heap.
  */
 #ifndef CANFDI_APP_OUT_H
 #define CANFDI_APP_OUT_H

@@ -67,4 +67,6 @@ const uint32_t canfdi_catalogue_dtc[CANFDI_DTC_COUNT] = {
   CANFDI_DTC_U1A31,
   CANFDI_DTC_U1A40,
   CANFDI_DTC_U1A41,
+  CANFDI_DTC_U1A50,
+  CANFDI_DTC_U1A51,
 };

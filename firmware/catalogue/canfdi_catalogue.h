@@ -81,8 +81,10 @@
 #define CANFDI_DTC_U1A31  0xDA3100UL
 #define CANFDI_DTC_U1A40  0xDA4000UL
 #define CANFDI_DTC_U1A41  0xDA4100UL
+#define CANFDI_DTC_U1A50  0xDA5000UL
+#define CANFDI_DTC_U1A51  0xDA5100UL
 
-#define CANFDI_DTC_COUNT 30U
+#define CANFDI_DTC_COUNT 32U
 
 /* Degradation states: the DBC's DegState value table. */
 #define CANFDI_DEG_NORMAL 0U

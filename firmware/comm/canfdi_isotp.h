@@ -83,7 +83,7 @@
 #ifndef CANFDI_CFG_ISOTP_RX_BYTES
 #define CANFDI_CFG_ISOTP_RX_BYTES 128U
 #endif
-/* Largest response, bytes (RAM 1 byte each): 0x19 0x0A over 30 DTCs is 123. */
+/* Largest response, bytes (RAM 1 byte each): 0x19 0x0A over 32 DTCs is 131. */
 #ifndef CANFDI_CFG_ISOTP_TX_BYTES
 #define CANFDI_CFG_ISOTP_TX_BYTES 256U
 #endif

@@ -19,6 +19,7 @@ CANFDI_STATIC_ASSERT(CANFDI_FAULT_COM_THR_COUNTER == CANFDI_FAULT_COM_DCM_TIMEOU
 CANFDI_STATIC_ASSERT(CANFDI_FAULT_COM_DCM_IMPLAUSIBLE == CANFDI_FAULT_COM_DCM_TIMEOUT + 8U,
                      rx_comm_faults_order2);
 CANFDI_STATIC_ASSERT(CANFDI_RX_MON_COUNT <= 32, rx_monitors_fit_mask);
+CANFDI_STATIC_ASSERT(CANFDI_RX_F_E2E_COUNT == (unsigned)CANFDI_RX_F_COUNT, rx_every_frame_is_e2e);
 CANFDI_STATIC_ASSERT(CANFDI_RX_IN_COUNT <= 32, rx_inputs_fit_mask);
 /* Every supervised frame is 8 bytes in the DBC (the length check). */
 CANFDI_STATIC_ASSERT((CANFDI_MSG_DCM_SENSOR_LENGTH == 8U) && (CANFDI_MSG_THR_SENSOR_LENGTH == 8U) &&
@@ -32,7 +33,7 @@ typedef struct {
   uint32_t cycle_us;
   uint8_t mon_timeout;
   uint8_t mon_length;
-  uint8_t mon_crc; /* E2E frames only */
+  uint8_t mon_crc;
   uint8_t mon_counter;
   uint8_t mon_range;
   uint8_t first_input;
@@ -47,9 +48,11 @@ static const frame_info_t frame_info[CANFDI_RX_F_COUNT] = {
      CANFDI_RX_MON_THR_LENGTH, CANFDI_RX_MON_THR_CRC, CANFDI_RX_MON_THR_COUNTER,
      CANFDI_RX_MON_THR_IMPLAUSIBLE, CANFDI_RX_IN_THR_TPS1, 4U},
     {CANFDI_MSG_SETPOINT_DCM_CYCLE_TIME_MS * 1000U, CANFDI_RX_MON_SP_DCM_TIMEOUT,
-     CANFDI_RX_MON_SP_DCM_LENGTH, 0U, 0U, CANFDI_RX_MON_SP_DCM_RANGE, CANFDI_RX_IN_SP_DCM_SPEED, 2U},
+     CANFDI_RX_MON_SP_DCM_LENGTH, CANFDI_RX_MON_SP_DCM_CRC, CANFDI_RX_MON_SP_DCM_COUNTER,
+     CANFDI_RX_MON_SP_DCM_RANGE, CANFDI_RX_IN_SP_DCM_SPEED, 2U},
     {CANFDI_MSG_SETPOINT_THR_CYCLE_TIME_MS * 1000U, CANFDI_RX_MON_SP_THR_TIMEOUT,
-     CANFDI_RX_MON_SP_THR_LENGTH, 0U, 0U, CANFDI_RX_MON_SP_THR_RANGE, CANFDI_RX_IN_SP_THR_ANGLE, 1U},
+     CANFDI_RX_MON_SP_THR_LENGTH, CANFDI_RX_MON_SP_THR_CRC, CANFDI_RX_MON_SP_THR_COUNTER,
+     CANFDI_RX_MON_SP_THR_RANGE, CANFDI_RX_IN_SP_THR_ANGLE, 1U},
 };
 
 /* Per-input constants: frame, plausible raw range, raw -> Q16.16 SI. */
@@ -275,16 +278,10 @@ static int setpoint(canfdi_rx_t *rx, unsigned f, const uint8_t *data, uint8_t dl
                     uint32_t now_us)
 {
   const frame_info_t *fi = &frame_info[f];
-  int out;
-  if (dlc != 8U) {
-    report(rx, fi->mon_length, true);
-    canfdi_count_inc(&rx->diag.length_err[f]);
-    frame_error(rx, f);
-    out = CANFDI_RX_BAD_LENGTH;
-  } else {
+  int out = judge_e2e(rx, f, data, dlc);
+  if (out == CANFDI_RX_ACCEPTED) {
     int st;
     bool ok;
-    report(rx, fi->mon_length, false);
     if (f == (unsigned)CANFDI_RX_F_SP_DCM) {
       struct canfdi_msg_setpoint_dcm_t m;
       st = canfdi_msg_setpoint_dcm_unpack(&m, data, dlc);
@@ -312,10 +309,10 @@ void canfdi_rx_default_cfg(canfdi_rx_cfg_t *cfg)
 {
   if (cfg != NULL) {
     for (unsigned f = 0U; f < (unsigned)CANFDI_RX_F_COUNT; f++) {
-      const bool e2e = (f < CANFDI_RX_F_E2E_COUNT);
-      cfg->frame[f].timeout_cycles = e2e ? 4U : 5U;
-      cfg->frame[f].recover_frames = e2e ? 3U : 1U;
-      cfg->frame[f].max_delta = e2e ? 2U : 1U;
+      const bool sensor = (f <= (unsigned)CANFDI_RX_F_THR_SENSOR);
+      cfg->frame[f].timeout_cycles = sensor ? 4U : 5U;
+      cfg->frame[f].recover_frames = sensor ? 3U : 1U;
+      cfg->frame[f].max_delta = 2U;
     }
     for (unsigned i = 0U; i < (unsigned)CANFDI_RX_IN_COUNT; i++) {
       cfg->default_q16[i] = 0;
@@ -336,8 +333,9 @@ int canfdi_rx_init(canfdi_rx_t *rx, const canfdi_rx_cfg_t *cfg, uint32_t now_us)
            (fc->max_delta >= 1U) && (fc->max_delta < CANFDI_E2E_COUNTER_MOD);
     }
     if (ok) {
-      static const uint16_t e2e_id[CANFDI_RX_F_E2E_COUNT] = {CANFDI_MSG_DCM_SENSOR_FRAME_ID,
-                                                              CANFDI_MSG_THR_SENSOR_FRAME_ID};
+      static const uint16_t e2e_id[CANFDI_RX_F_E2E_COUNT] = {
+          CANFDI_MSG_DCM_SENSOR_FRAME_ID, CANFDI_MSG_THR_SENSOR_FRAME_ID,
+          CANFDI_MSG_SETPOINT_DCM_FRAME_ID, CANFDI_MSG_SETPOINT_THR_FRAME_ID};
       rx->cfg = *cfg;
       for (unsigned f = 0U; f < CANFDI_RX_F_E2E_COUNT; f++) {
         const int st = canfdi_e2e_rx_init(&rx->e2e[f], e2e_id[f], cfg->frame[f].max_delta);
@@ -493,9 +491,7 @@ int canfdi_rx_step(canfdi_rx_t *rx, uint32_t now_us)
         fs->timed_out = true;
         canfdi_count_inc(&rx->diag.timeouts[f]);
         frame_error(rx, f);
-        if (f < CANFDI_RX_F_E2E_COUNT) {
-          fs->resync = true;
-        }
+        fs->resync = true; /* every supervised frame is E2E protected */
       }
       if (fs->timed_out || fs->received) {
         report(rx, frame_info[f].mon_timeout, fs->timed_out);
@@ -541,7 +537,15 @@ uint8_t canfdi_rx_monitor_fault_id(unsigned mon)
 
 uint32_t canfdi_rx_monitor_dtc(unsigned mon)
 {
-  return canfdi_catalogue_fault[canfdi_rx_monitor_fault_id(mon)].dtc[0];
+  uint32_t out;
+  if ((mon == (unsigned)CANFDI_RX_MON_SP_DCM_TIMEOUT) || (mon == (unsigned)CANFDI_RX_MON_SP_THR_TIMEOUT)) {
+    out = CANFDI_DTC_U1A50; /* lost communication with the vehicle controller */
+  } else if ((mon > (unsigned)CANFDI_RX_MON_THR_IMPLAUSIBLE) && (mon < (unsigned)CANFDI_RX_MON_COUNT)) {
+    out = CANFDI_DTC_U1A51; /* invalid data from it */
+  } else {
+    out = canfdi_catalogue_fault[canfdi_rx_monitor_fault_id(mon)].dtc[0];
+  }
+  return out;
 }
 
 int32_t canfdi_rx_raw_to_q16(int32_t raw, int64_t scale_q32, int64_t offset_q32)

@@ -9,8 +9,11 @@
  *   frame        id     cycle  checks
  *   DcmSensor    0x010  1 ms   length, E2E CRC, E2E counter, raw range, timeout
  *   ThrSensor    0x011  1 ms   length, E2E CRC, E2E counter, raw range, timeout
- *   SetpointDcm  0x100  10 ms  length, raw range, timeout
- *   SetpointThr  0x101  10 ms  length, raw range, timeout
+ *   SetpointDcm  0x100  10 ms  length, E2E CRC, E2E counter, raw range, timeout
+ *   SetpointThr  0x101  10 ms  length, E2E CRC, E2E counter, raw range, timeout
+ * Every supervised frame is E2E protected (comm/canfdi_e2e.h, data ID = the
+ * CAN identifier): a corrupted or forged setpoint (a throttle setpoint
+ * opens the valve) is rejected exactly like a corrupted sensor frame.
  * Every other identifier is counted (diag.unknown_id) and ignored; its data
  * is never read. Cycle times come from the DBC (CANFDI_MSG_*_CYCLE_TIME_MS);
  * all packing and unpacking goes through the generated codec
@@ -21,7 +24,7 @@
  * Per received frame, canfdi_rx_frame() judges in this order and stops at
  * the first failure:
  *   1. length: DLC must be 8 (the DBC length)           -> monitor LENGTH
- *   2. CRC (1 ms frames, canfdi_e2e_check)               -> monitor CRC
+ *   2. CRC (canfdi_e2e_check)                            -> monitor CRC
  *   3. counter: REPEATED or WRONG_SEQUENCE (jump beyond  -> monitor COUNTER
  *      max_delta) reject the frame
  *   4. raw range of each signal against canfdi_raw_limits.h -> IMPLAUSIBLE
@@ -34,6 +37,10 @@
  * (E2E INITIAL) instead of flagging the jump those frames leave; the same
  * after a timeout. A lost communication therefore shows as TIMEOUT only, a
  * CRC burst as CRC only (fault isolation, catalogue faults 22..31).
+ * A second sender on a supervised identifier (its own counter sequence
+ * interleaved with the genuine one) shows as counter errors: after each
+ * WRONG_SEQUENCE the check resynchronises to the frame just seen, so the
+ * next frame of the other sequence is out of sequence again.
  *
  * Timeout (canfdi_rx_step): a frame times out when no frame with its id —
  * whatever its content — arrived for timeout_cycles cycle times:
@@ -42,7 +49,8 @@
  * normal case: a frame is received before the step), that is exactly the
  * step at which the timeout_cycles-th consecutive frame is missing: with the
  * default 4 for the 1 ms frames, frames up to t, nothing after -> steps
- * t+1..t+3 ms pre-passed, t+4 ms pre-failed. Before the first reception the
+ * t+1..t+3 ms pre-passed, t+4 ms pre-failed; the setpoints' default is 5
+ * cycles (50 ms). Before the first reception the
  * supervision runs from init with the window first_timeout_us when that is
  * longer (startup timeout; AUTOSAR COM's "first timeout": the other nodes
  * of a bus boot at their own pace, so an ECU that starts before its sensor
@@ -80,7 +88,14 @@
  *                control, but it is a defined number.
  * Recovery: after an error an input returns to VALID once recover_frames
  * consecutive samples of it were accepted (default 3 for the 1 ms frames,
- * 1 for the setpoints). At start-up nothing is in error: an input is
+ * 1 for the setpoints).
+ * Setpoints in error (canfdi_app decides what follows; docs/design.md,
+ * "Setpoint supervision"): a rejected setpoint frame (length, CRC, counter,
+ * range) or a missing one leaves the last accepted setpoint SUBSTITUTED,
+ * i.e. held, while it is younger than the timeout window (5 cycles = 50 ms
+ * after its acceptance); after that the input is INVALID and the
+ * application applies its safe reaction. The next accepted frame makes it
+ * VALID again (recover_frames 1). At start-up nothing is in error: an input is
  * INVALID (default value) until its first accepted sample, then VALID —
  * unless the startup timeout expired first, which is an error like any
  * other timeout (recover_frames apply).
@@ -96,9 +111,13 @@
  * not debounce here again. Monitors 0..9 are the catalogue's communication
  * faults 22..31 in catalogue order (canfdi_rx_monitor_fault_id(),
  * canfdi_rx_monitor_dtc(): U1A00/U1A01 timeout, U1A10/11 counter, U1A20/21
- * CRC, U1A30/31 length, U1A40/41 implausible; DCM first). Monitors 10..15
- * supervise the setpoints; dbc/dtcs.csv has no code for them (DTC 0), the
- * application handles them through the input quality.
+ * CRC, U1A30/31 length, U1A40/41 implausible; DCM first). Monitors 10..19
+ * supervise the setpoints, which have no catalogue fault (the simulator
+ * injects none) but two trouble codes of their own, per source node (the
+ * vehicle controller) as J2012 has them: the two timeouts report to U1A50
+ * (lost communication), the length, CRC, counter and range monitors of both
+ * frames to U1A51 (invalid data). Monitors sharing a code are combined per
+ * step by the DTC routing (diag/canfdi_dtcroute.h: a failure dominates).
  *
  * Use, once per 1 ms step:
  *   for each received frame: canfdi_rx_frame(&rx, id, data, dlc, t_rx_us);
@@ -127,14 +146,17 @@
  *   canfdi_rx_frame, CRC error           266                320
  *   canfdi_rx_frame, length error        131                161
  *   canfdi_rx_frame, setpoint            171                262
+ *     (before the setpoints were E2E protected; now a setpoint frame pays
+ *     the E2E check of a sensor frame plus 1..2 conversions: not
+ *     re-measured)
  *   canfdi_rx_frame, unknown id          43                 57
  *   canfdi_rx_step                       638 / 672 / 765    866 / 891 / 1013
  *   canfdi_rx_raw_to_q16                 55                 102
  * A 1 ms cycle with both sensor frames (and a setpoint every 10 ms) costs
  * about 2000 (M4) / 2900 (M0+) instructions. No division anywhere; 64-bit
  * multiplies call __aeabi_lmul on M0+.
- * Memory: sizeof(canfdi_rx_t) = 712 bytes on a 32-bit target (204 of them
- * the diagnostics, 88 the two E2E receivers with their counters); code
+ * Memory: sizeof(canfdi_rx_t) = 804 bytes on Cortex-M (204 of them
+ * the diagnostics, 176 the four E2E receivers with their counters); code
  * 2.9 kB (-Os, M0+ and M4); stack: canfdi_rx_frame 48 + 88 bytes plus the
  * E2E check and the generated unpack (-fstack-usage). No heap, no
  * recursion.
@@ -150,12 +172,12 @@
 typedef enum {
   CANFDI_RX_F_DCM_SENSOR = 0, /* 0x010, 1 ms, E2E */
   CANFDI_RX_F_THR_SENSOR = 1, /* 0x011, 1 ms, E2E */
-  CANFDI_RX_F_SP_DCM = 2,     /* 0x100, 10 ms */
-  CANFDI_RX_F_SP_THR = 3,     /* 0x101, 10 ms */
+  CANFDI_RX_F_SP_DCM = 2,     /* 0x100, 10 ms, E2E */
+  CANFDI_RX_F_SP_THR = 3,     /* 0x101, 10 ms, E2E */
   CANFDI_RX_F_COUNT = 4
 } canfdi_rx_frame_id_t;
 
-#define CANFDI_RX_F_E2E_COUNT 2U /* frames 0..1 are E2E protected */
+#define CANFDI_RX_F_E2E_COUNT 4U /* frames 0..3: every supervised frame is E2E protected */
 
 /* The validated input set; values Q16.16 in the unit given. */
 typedef enum {
@@ -197,13 +219,17 @@ typedef enum {
   CANFDI_RX_MON_THR_LENGTH = 7,      /* U1A31 */
   CANFDI_RX_MON_DCM_IMPLAUSIBLE = 8, /* U1A40 */
   CANFDI_RX_MON_THR_IMPLAUSIBLE = 9, /* U1A41 */
-  CANFDI_RX_MON_SP_DCM_TIMEOUT = 10, /* no DTC assigned */
-  CANFDI_RX_MON_SP_THR_TIMEOUT = 11,
-  CANFDI_RX_MON_SP_DCM_LENGTH = 12,
-  CANFDI_RX_MON_SP_THR_LENGTH = 13,
-  CANFDI_RX_MON_SP_DCM_RANGE = 14,
-  CANFDI_RX_MON_SP_THR_RANGE = 15,
-  CANFDI_RX_MON_COUNT = 16
+  CANFDI_RX_MON_SP_DCM_TIMEOUT = 10, /* U1A50 (no catalogue fault) */
+  CANFDI_RX_MON_SP_THR_TIMEOUT = 11, /* U1A50 */
+  CANFDI_RX_MON_SP_DCM_LENGTH = 12,  /* U1A51 */
+  CANFDI_RX_MON_SP_THR_LENGTH = 13,  /* U1A51 */
+  CANFDI_RX_MON_SP_DCM_RANGE = 14,   /* U1A51 */
+  CANFDI_RX_MON_SP_THR_RANGE = 15,   /* U1A51 */
+  CANFDI_RX_MON_SP_DCM_COUNTER = 16, /* U1A51 */
+  CANFDI_RX_MON_SP_THR_COUNTER = 17, /* U1A51 */
+  CANFDI_RX_MON_SP_DCM_CRC = 18,     /* U1A51 */
+  CANFDI_RX_MON_SP_THR_CRC = 19,     /* U1A51 */
+  CANFDI_RX_MON_COUNT = 20
 } canfdi_rx_mon_t;
 
 typedef struct {
@@ -225,8 +251,7 @@ typedef enum {
 typedef struct {
   uint8_t timeout_cycles; /* 1..255 missed cycles until timeout */
   uint8_t recover_frames; /* 1..255 accepted samples after an error until VALID */
-  uint8_t max_delta;      /* 1..15 largest counter step still usable (E2E
-                             frames; ignored for the setpoints) */
+  uint8_t max_delta;      /* 1..15 largest counter step still usable */
 } canfdi_rx_frame_cfg_t;
 
 typedef struct {
@@ -244,7 +269,7 @@ typedef struct {
   uint32_t steps;                          /* canfdi_rx_step calls */
   uint32_t accepted[CANFDI_RX_F_COUNT];    /* frames with every signal taken */
   uint32_t length_err[CANFDI_RX_F_COUNT];  /* frames with DLC != 8 */
-  uint32_t crc_err[CANFDI_RX_F_COUNT];     /* frames with a wrong CRC (E2E frames) */
+  uint32_t crc_err[CANFDI_RX_F_COUNT];     /* frames with a wrong CRC */
   uint32_t counter_err[CANFDI_RX_F_COUNT]; /* frames repeated or out of sequence */
   uint32_t implausible[CANFDI_RX_F_COUNT]; /* frames with >= 1 signal out of range */
   uint32_t timeouts[CANFDI_RX_F_COUNT];    /* transitions into timeout */
@@ -288,10 +313,10 @@ typedef struct {
   bool initialised;
 } canfdi_rx_t;
 
-/* Defaults (see the header): sensors timeout 4 cycles, recovery 3 frames,
- * max_delta 2 (one lost frame tolerated); setpoints timeout 5 cycles
- * (50 ms), recovery 1; default values 0. Cannot fail by contract
- * (no-op on NULL). */
+/* Defaults (see the header): sensors timeout 4 cycles, recovery 3 frames;
+ * setpoints timeout 5 cycles (50 ms: how long a setpoint in error is held),
+ * recovery 1; max_delta 2 for all (one lost frame tolerated); default
+ * values 0. Cannot fail by contract (no-op on NULL). */
 void canfdi_rx_default_cfg(canfdi_rx_cfg_t *cfg);
 
 /*
@@ -378,7 +403,9 @@ int canfdi_rx_monitor_result(const canfdi_rx_t *rx, unsigned mon);
  * setpoint monitors and for mon out of range. Cost: O(1). */
 uint8_t canfdi_rx_monitor_fault_id(unsigned mon);
 
-/* ISO 14229-1 3-byte DTC of a monitor (CANFDI_DTC_U1A*), 0 if none.
+/* ISO 14229-1 3-byte DTC of a monitor (CANFDI_DTC_U1A*): the sensor
+ * monitors' from their catalogue fault, U1A50 for the setpoint timeouts,
+ * U1A51 for the other setpoint monitors; 0 for mon out of range.
  * Cost: O(1), a table lookup in canfdi_catalogue_fault[]. */
 uint32_t canfdi_rx_monitor_dtc(unsigned mon);
 

@@ -3,6 +3,7 @@
  */
 #include "comm/canfdi_tx.h"
 
+#include "catalogue/canfdi_catalogue.h"
 #include "comm/gen/canfdi_msg.h"
 #include "comm/gen/canfdi_raw_limits.h"
 #include "comm/gen/canfdi_sig_conv.h"
@@ -24,6 +25,9 @@ CANFDI_STATIC_ASSERT(PERIOD_STEPS(CANFDI_MSG_ECU_PARAM_THR_CYCLE_TIME_MS) <= 255
                      tx_period_fits_countdown);
 CANFDI_STATIC_ASSERT(CANFDI_CFG_TX_DTC_QUEUE >= 1U && CANFDI_CFG_TX_DTC_QUEUE <= 255U,
                      tx_queue_size);
+/* EcuDtc carries a DTC's index among the stored ones in 5 bits (the E2E
+ * header took the room): a larger catalogue needs a new frame layout. */
+CANFDI_STATIC_ASSERT(CANFDI_DTC_COUNT <= (CANFDI_RAW_ECU_DTC_DTC_INDEX_MAX + 1U), tx_dtc_index_fits_ecu_dtc);
 
 typedef struct {
   uint8_t period; /* steps */
@@ -147,6 +151,13 @@ static uint32_t sat_u(canfdi_tx_t *tx, uint32_t v, uint32_t max)
   return out;
 }
 
+/* A time in us as the DBC's 2 us units, rounded up (a maximum is never
+ * under-reported); overflow-free for any uint32_t. */
+static uint32_t us_to_2us_up(uint32_t us)
+{
+  return (us / 2U) + (us & 1U);
+}
+
 static uint16_t raw_u16(int32_t raw)
 {
   CANFDI_ASSERT((raw >= 0) && (raw <= (int32_t)UINT16_MAX)); /* within raw limits */
@@ -186,12 +197,14 @@ int canfdi_tx_init(canfdi_tx_t *tx)
   int out = -CANFDI_EINVAL;
   if (tx != NULL) {
     static const canfdi_tx_diag_t zero;
-    canfdi_e2e_tx_init(&tx->e2e[0], (uint16_t)CANFDI_MSG_DCM_ACTUATOR_FRAME_ID);
-    canfdi_e2e_tx_init(&tx->e2e[1], (uint16_t)CANFDI_MSG_THR_ACTUATOR_FRAME_ID);
+    canfdi_e2e_tx_init(&tx->e2e[CANFDI_TX_E2E_DCM_ACT], (uint16_t)CANFDI_MSG_DCM_ACTUATOR_FRAME_ID);
+    canfdi_e2e_tx_init(&tx->e2e[CANFDI_TX_E2E_THR_ACT], (uint16_t)CANFDI_MSG_THR_ACTUATOR_FRAME_ID);
+    canfdi_e2e_tx_init(&tx->e2e[CANFDI_TX_E2E_STATUS], (uint16_t)CANFDI_MSG_ECU_STATUS_FRAME_ID);
+    canfdi_e2e_tx_init(&tx->e2e[CANFDI_TX_E2E_DIAGNOSIS], (uint16_t)CANFDI_MSG_ECU_DIAGNOSIS_FRAME_ID);
+    canfdi_e2e_tx_init(&tx->e2e[CANFDI_TX_E2E_DTC], (uint16_t)CANFDI_MSG_ECU_DTC_FRAME_ID);
     for (unsigned f = 0U; f < (unsigned)CANFDI_TX_F_COUNT; f++) {
       tx->countdown[f] = (uint8_t)(slots[f].phase % slots[f].period);
     }
-    tx->alive = 0U;
     tx->q_head = 0U;
     tx->q_len = 0U;
     tx->diag = zero;
@@ -236,7 +249,7 @@ int canfdi_tx_encode_dcm_act(canfdi_tx_t *tx, const canfdi_tx_dcm_act_t *v, canf
     m.dcm_enable = enable ? 1U : 0U;
     m.dcm_ua_cmd = raw_u16(to_raw(tx, C_DCM_UA_CMD, v->ua_cmd_q16));
     frame_head(out, CANFDI_MSG_DCM_ACTUATOR_FRAME_ID, canfdi_msg_dcm_actuator_pack(out->data, &m, 8U));
-    ret = canfdi_e2e_protect(&tx->e2e[0], out->data, 8U);
+    ret = canfdi_e2e_protect(&tx->e2e[CANFDI_TX_E2E_DCM_ACT], out->data, 8U);
     CANFDI_ASSERT(ret == CANFDI_OK);
     canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_DCM_ACT]);
   }
@@ -253,7 +266,7 @@ int canfdi_tx_encode_thr_act(canfdi_tx_t *tx, const canfdi_tx_thr_act_t *v, canf
     m.thr_enable = v->enable ? 1U : 0U;
     m.thr_u_cmd = raw_u16(to_raw(tx, C_THR_UCMD, v->u_cmd_q16));
     frame_head(out, CANFDI_MSG_THR_ACTUATOR_FRAME_ID, canfdi_msg_thr_actuator_pack(out->data, &m, 8U));
-    ret = canfdi_e2e_protect(&tx->e2e[1], out->data, 8U);
+    ret = canfdi_e2e_protect(&tx->e2e[CANFDI_TX_E2E_THR_ACT], out->data, 8U);
     CANFDI_ASSERT(ret == CANFDI_OK);
     canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_THR_ACT]);
   }
@@ -310,15 +323,16 @@ int canfdi_tx_encode_status(canfdi_tx_t *tx, const canfdi_tx_status_t *v, canfdi
         (uint8_t)sat_u(tx, v->active_dtc_count, CANFDI_RAW_ECU_STATUS_STS_ACTIVE_DTC_COUNT_MAX);
     m.sts_deadline_misses =
         (uint16_t)sat_u(tx, v->deadline_misses, CANFDI_RAW_ECU_STATUS_STS_DEADLINE_MISSES_MAX);
-    m.sts_step_time_max =
-        (uint16_t)sat_u(tx, v->step_time_max_us, CANFDI_RAW_ECU_STATUS_STS_STEP_TIME_MAX_MAX);
-    m.sts_cycle_time_max =
-        (uint16_t)sat_u(tx, v->cycle_time_max_us, CANFDI_RAW_ECU_STATUS_STS_CYCLE_TIME_MAX_MAX);
-    m.sts_alive_counter = tx->alive;
-    tx->alive = (uint8_t)((tx->alive + 1U) & CANFDI_RAW_ECU_STATUS_STS_ALIVE_COUNTER_MAX);
+    m.sts_step_time_max = (uint16_t)sat_u(tx, us_to_2us_up(v->step_time_max_us),
+                                          CANFDI_RAW_ECU_STATUS_STS_STEP_TIME_MAX_MAX);
+    m.sts_cycle_time_max = (uint16_t)sat_u(tx, us_to_2us_up(v->cycle_time_max_us),
+                                           CANFDI_RAW_ECU_STATUS_STS_CYCLE_TIME_MAX_MAX);
+    m.ecu_status_crc = 0U;
+    m.ecu_status_counter = 0U; /* canfdi_e2e_protect writes it: the alive counter */
     frame_head(out, CANFDI_MSG_ECU_STATUS_FRAME_ID, canfdi_msg_ecu_status_pack(out->data, &m, 8U));
+    ret = canfdi_e2e_protect(&tx->e2e[CANFDI_TX_E2E_STATUS], out->data, 8U);
+    CANFDI_ASSERT(ret == CANFDI_OK);
     canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_STATUS]);
-    ret = CANFDI_OK;
   }
   return ret;
 }
@@ -338,10 +352,13 @@ int canfdi_tx_encode_diagnosis(canfdi_tx_t *tx, const canfdi_tx_diagnosis_t *v,
                                            CANFDI_RAW_ECU_DIAGNOSIS_DIAG_THR_CONFIDENCE_MAX);
     m.diag_com_confidence = (uint8_t)sat_u(tx, v->com_confidence_pct,
                                            CANFDI_RAW_ECU_DIAGNOSIS_DIAG_COM_CONFIDENCE_MAX);
+    m.ecu_diagnosis_crc = 0U;
+    m.ecu_diagnosis_counter = 0U;
     frame_head(out, CANFDI_MSG_ECU_DIAGNOSIS_FRAME_ID,
                canfdi_msg_ecu_diagnosis_pack(out->data, &m, 8U));
+    ret = canfdi_e2e_protect(&tx->e2e[CANFDI_TX_E2E_DIAGNOSIS], out->data, 8U);
+    CANFDI_ASSERT(ret == CANFDI_OK);
     canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_DIAGNOSIS]);
-    ret = CANFDI_OK;
   }
   return ret;
 }
@@ -388,12 +405,15 @@ int canfdi_tx_encode_dtc(canfdi_tx_t *tx, const canfdi_tx_dtc_t *v, bool change,
     m.dtc_sts_not_completed_this_op_cycle = (uint8_t)((st >> 6U) & 1U);
     m.dtc_sts_warning_indicator = (uint8_t)((st >> 7U) & 1U);
     m.dtc_occurrence = v->occurrence;
-    m.dtc_index = v->index;
-    m.dtc_count = v->count;
+    m.dtc_index = (uint8_t)sat_u(tx, v->index, CANFDI_RAW_ECU_DTC_DTC_INDEX_MAX);
+    m.dtc_count = (uint8_t)sat_u(tx, v->count, CANFDI_RAW_ECU_DTC_DTC_COUNT_MAX);
     m.dtc_tx_reason = change ? 1U : 0U;
+    m.ecu_dtc_crc = 0U;
+    m.ecu_dtc_counter = 0U;
     frame_head(out, CANFDI_MSG_ECU_DTC_FRAME_ID, canfdi_msg_ecu_dtc_pack(out->data, &m, 8U));
+    ret = canfdi_e2e_protect(&tx->e2e[CANFDI_TX_E2E_DTC], out->data, 8U);
+    CANFDI_ASSERT(ret == CANFDI_OK);
     canfdi_count_inc(&tx->diag.frames[CANFDI_TX_F_DTC]);
-    ret = CANFDI_OK;
   }
   return ret;
 }

@@ -8,10 +8,10 @@
  *   ThrActuator     0x021  1 ms    0      motor voltage command, enable; E2E
  *   EcuResidualDcm  0x200  10 ms   2      r1..r4, normalised (1.0 = threshold)
  *   EcuResidualThr  0x201  10 ms   7      corr, tps1, tps2, current residuals
- *   EcuStatus       0x300  100 ms  3      degradation, bridge, limp-home, counts
- *   EcuDiagnosis    0x301  100 ms  23     isolated fault ids and confidences
+ *   EcuStatus       0x300  100 ms  3      degradation, bridge, limp-home, counts; E2E
+ *   EcuDiagnosis    0x301  100 ms  23     isolated fault ids and confidences; E2E
  *   EcuSelfDiag     0x302  100 ms  13     the supervisor's monotone counters
- *   EcuDtc          0x310  100 ms  43     one stored DTC per frame, round robin
+ *   EcuDtc          0x310  100 ms  43     one stored DTC per frame, round robin; E2E
  *                   + on change: queued by canfdi_tx_dtc_event, one per step
  *   EcuParamDcm     0x320  100 ms  63     RLS estimates of the DC motor
  *   EcuParamThr     0x321  100 ms  83     estimates of the throttle
@@ -26,12 +26,19 @@
  * it never drifts or wraps.
  *
  * Encoding: all bits go through the generated codec (comm/gen/canfdi_msg.h,
- * *_pack); the actuator frames are then E2E protected (canfdi_e2e_protect:
- * counter +1 per frame, CRC-8 over data id and bytes 1..7). Values are
+ * *_pack); the frames marked E2E (the DBC's CanfdiE2E) are then protected
+ * (canfdi_e2e_protect: counter +1 per frame of that identifier, CRC-8 over
+ * data id and bytes 1..7): the actuators, and the frames a tester or the
+ * vehicle acts on, EcuStatus, EcuDiagnosis and EcuDtc (the cyclic and the
+ * on-change EcuDtc share one counter, in the order encoded). EcuStatus's
+ * counter is its alive counter. The engineering frames (residuals,
+ * self-diagnostics, parameters) are not protected (dbc/README.md). Values are
  * converted with the integer constants of comm/gen/canfdi_sig_conv.h and
  * saturated to the DBC's [min|max] (raw limits of canfdi_raw_limits.h);
  * integers (counts, times, confidences, DTC, the EcuSelfDiag counters)
- * saturate at their field's maximum; an enumeration out of its table saturates to its top value,
+ * saturate at their field's maximum (EcuStatus: 63 active DTCs, step and
+ * cycle time in 2 us units rounded up, 4094 us; EcuDtc: index 31, count
+ * 63); an enumeration out of its table saturates to its top value,
  * except the actuator bridge: an unknown bridge selection is sent as
  * bridge none with the drive disabled (the safe state). Every limited
  * value is counted in diag.saturations (or diag.invalid_enums).
@@ -65,11 +72,13 @@
  *   with a 10/100 ms frame and/or event    701 / 856 / 1078   1116 / 1426 / 1856
  * Per actuator frame about 300 (M4) / 450 (M0+): one 64-bit conversion
  * (__aeabi_lmul on M0+), the generated pack and the E2E CRC over 9 bytes.
- * Memory: sizeof(canfdi_tx_t) = 156 bytes on a 32-bit target with the
+ * Memory: sizeof(canfdi_tx_t) = 168 bytes on Cortex-M with the
  * default 8-entry DTC event queue (8 bytes per entry); the caller's frame
  * buffer 4 x 16 bytes; code 2.7 kB (-Os); stack <= 48 bytes per encoder
- * plus the generated pack and the E2E protect (-fstack-usage). No heap, no
- * recursion, no floating point.
+ * plus the generated pack and the E2E protect (-fstack-usage). The E2E
+ * protection of EcuStatus, EcuDiagnosis and EcuDtc adds one CRC over 9
+ * bytes to those frames (about 100 instructions on M4, not re-measured).
+ * No heap, no recursion, no floating point.
  */
 #ifndef CANFDI_TX_H
 #define CANFDI_TX_H
@@ -134,16 +143,16 @@ typedef struct {
   int32_t current_q16;
 } canfdi_tx_res_thr_t;
 
-/* EcuStatus (the alive counter is kept here). */
+/* EcuStatus (its E2E counter, the alive counter, is kept in canfdi_tx_t). */
 typedef struct {
   uint8_t deg_state_dcm;      /* CANFDI_DEG_*: 0 normal .. 3 fail_silent */
   uint8_t deg_state_thr;
   uint8_t active_bridge;      /* 0 none, 1 A, 2 B */
   bool thr_limp_home;
-  uint32_t active_dtc_count;  /* saturates at 255 */
+  uint32_t active_dtc_count;  /* saturates at 63 */
   uint32_t deadline_misses;   /* saturates at 65535 */
-  uint32_t step_time_max_us;  /* saturates at 4095 */
-  uint32_t cycle_time_max_us; /* saturates at 4095 */
+  uint32_t step_time_max_us;  /* sent in 2 us units rounded up; saturates at 4094 */
+  uint32_t cycle_time_max_us; /* the same */
 } canfdi_tx_status_t;
 
 /* EcuDiagnosis. */
@@ -172,8 +181,8 @@ typedef struct {
   uint32_t dtc;       /* ISO 14229-1 3-byte DTC (CANFDI_DTC_*); saturates at 0xFFFFFF */
   uint8_t status;     /* UDS status byte: bit 0 testFailed .. bit 7 warningIndicator */
   uint8_t occurrence; /* times testFailed went 0 -> 1 */
-  uint8_t index;      /* 0-based index among the stored DTCs */
-  uint8_t count;      /* number of stored DTCs */
+  uint8_t index;      /* 0-based index among the stored DTCs; saturates at 31 */
+  uint8_t count;      /* number of stored DTCs; saturates at 63 */
 } canfdi_tx_dtc_t;
 
 /* EcuParamDcm, physical units, Q16.16. */
@@ -222,11 +231,20 @@ typedef struct {
   uint32_t uds_frames;                /* UdsPhysResp frames encoded */
 } canfdi_tx_diag_t;
 
+/* The E2E protected frames' sender states in canfdi_tx_t.e2e[]. */
+typedef enum {
+  CANFDI_TX_E2E_DCM_ACT = 0,   /* 0x020 DcmActuator */
+  CANFDI_TX_E2E_THR_ACT = 1,   /* 0x021 ThrActuator */
+  CANFDI_TX_E2E_STATUS = 2,    /* 0x300 EcuStatus (its alive counter) */
+  CANFDI_TX_E2E_DIAGNOSIS = 3, /* 0x301 EcuDiagnosis */
+  CANFDI_TX_E2E_DTC = 4,       /* 0x310 EcuDtc, cyclic and on change */
+  CANFDI_TX_E2E_COUNT = 5
+} canfdi_tx_e2e_id_t;
+
 /* Instance, caller-owned (static). Read diag directly. */
 typedef struct {
-  canfdi_e2e_tx_t e2e[2];                 /* DcmActuator, ThrActuator */
+  canfdi_e2e_tx_t e2e[CANFDI_TX_E2E_COUNT]; /* see canfdi_tx_e2e_id_t */
   uint8_t countdown[CANFDI_TX_F_COUNT];   /* steps until the frame is due */
-  uint8_t alive;                          /* next StsAliveCounter, 0..15 */
   uint8_t q_head;                         /* next event to send */
   uint8_t q_len;                          /* queued events */
   canfdi_tx_dtc_t queue[CANFDI_CFG_TX_DTC_QUEUE];
@@ -264,8 +282,8 @@ int canfdi_tx_dtc_event(canfdi_tx_t *tx, const canfdi_tx_dtc_t *rec);
 /*
  * Encoders: one frame each into *out (id, dlc 8, data), CANFDI_OK or
  * -CANFDI_EINVAL (NULL argument or tx not initialised; *out untouched).
- * The actuator encoders advance their E2E counter, the status encoder the
- * alive counter; none touches the schedule. `change` selects DtcTxReason
+ * The encoders of E2E protected frames (actuators, status, diagnosis, DTC)
+ * advance their frame's E2E counter; none touches the schedule. `change` selects DtcTxReason
  * (false cyclic, true change).
  */
 int canfdi_tx_encode_dcm_act(canfdi_tx_t *tx, const canfdi_tx_dcm_act_t *v, canfdi_tx_frame_t *out);

@@ -83,6 +83,10 @@ const canfdi_dtc_def_t canfdi_dtc_defaults[CANFDI_DTC_COUNT] = {
     ROW_IMMEDIATE(CANFDI_DTC_U1A31, COM, FRAME),
     ROW_IMMEDIATE(CANFDI_DTC_U1A40, COM, FRAME),
     ROW_IMMEDIATE(CANFDI_DTC_U1A41, COM, FRAME),
+    /* the setpoints (no catalogue fault): a timeout as U1A00, a rejected
+     * frame debounced like the sensor frames' */
+    ROW_IMMEDIATE(CANFDI_DTC_U1A50, COM, DIRECT),
+    ROW_IMMEDIATE(CANFDI_DTC_U1A51, COM, FRAME),
 };
 
 #undef ROW_IMMEDIATE

@@ -169,14 +169,14 @@
  * ---------------------------------------------------------------- memory
  * RAM: sizeof(canfdi_dtc_t) = 32 + 20 * CANFDI_CFG_DTC_MAX_DTCS
  *   + 48 * CANFDI_CFG_DTC_MAX_ENTRIES bytes on a 32-bit target (16 of the
- *   32 are the diagnostics); with the defaults (30 DTCs, 8 entries): 1016
+ *   32 are the diagnostics); with the defaults (32 DTCs, 8 entries): 1056
  *   bytes. Per DTC 20 bytes (16 of them the debouncer), per entry 48 bytes
  *   (32 of them the freeze frame).
- * ROM: the table, 16 bytes per DTC (480 for the product table), two
+ * ROM: the table, 16 bytes per DTC (512 for the product table), two
  *   debounce classes (28 bytes); code + tables 4038 bytes on M0+, 3764 on
  *   M4 (-Os), plus canfdi_debounce (472 / 438).
  * NVM image: at most CANFDI_DTC_IMAGE_MAX_BYTES
- *   (4 + 6 per DTC + 39 per entry: 496 bytes with the defaults).
+ *   (4 + 6 per DTC + 39 per entry: 508 bytes with the defaults).
  */
 #ifndef CANFDI_DTC_H
 #define CANFDI_DTC_H

@@ -120,13 +120,29 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
                      (agg[j] > 0) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, in->ff);
       }
     }
-    /* Source 3: the input supervision's monitors (raw per-step results) */
+    /* Source 3: the input supervision's monitors (raw per-step results),
+     * combined per DTC: several monitors share U1A50/U1A51, whose
+     * debouncer must see one report per step (a failure dominates) */
+    for (j = 0U; j < CANFDI_CFG_DTC_MAX_DTCS; j++) {
+      agg[j] = CANFDI_DIAG_REPORT_NONE;
+    }
     for (j = 0U; j < (uint32_t)CANFDI_RX_MON_COUNT; j++) {
       const uint32_t bit = UINT32_C(1) << j;
-      if ((r->com_dtc[j] != CANFDI_DTC_NONE) && (((in->com->prefailed | in->com->prepassed) & bit) != 0U)) {
-        rc += report(r, dtc, r->com_dtc[j],
-                     ((in->com->prefailed & bit) != 0U) ? CANFDI_DEB_REPORT_PREFAILED
-                                                        : CANFDI_DEB_REPORT_PREPASSED,
+      const uint8_t idx = r->com_dtc[j];
+      if ((idx != CANFDI_DTC_NONE) && (((in->com->prefailed | in->com->prepassed) & bit) != 0U)) {
+        if ((in->com->prefailed & bit) != 0U) {
+          agg[idx] = CANFDI_DIAG_REPORT_FAILED;
+        } else if (agg[idx] != CANFDI_DIAG_REPORT_FAILED) {
+          agg[idx] = CANFDI_DIAG_REPORT_PASSED;
+        } else {
+          /* a failure of another monitor of the same code dominates */
+        }
+      }
+    }
+    for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
+      if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
+        rc += report(r, dtc, (uint8_t)j,
+                     (agg[j] > 0) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED,
                      in->ff);
       }
     }

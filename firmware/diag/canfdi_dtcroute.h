@@ -17,8 +17,12 @@
  *      count restarts); not tested while the channel is invalid (the count
  *      holds). A drift the vote isolates (P0121/P0221) within p2135_steps
  *      is not a P2135;
- *   3. the input supervision's monitors (canfdi_rx report of the step), in
- *      monitor order, each to its U-code (monitors without a code skipped).
+ *   3. the input supervision's monitors (canfdi_rx report of the step),
+ *      each to its U-code (monitors without a code skipped), in DTC table
+ *      order; the monitors that share a code (the setpoints': U1A50 for
+ *      both timeouts, U1A51 for the rest) are combined into one report
+ *      per step, PREFAILED if any of them saw its symptom, else PREPASSED
+ *      if any ran (one report per step is what the debouncer counts).
  * The DTC table index of every fault, monitor and of P2135 is looked up
  * once at init (a linear search per code), so a step costs no search.
  *
@@ -30,11 +34,11 @@
  * Scaling and overflow: no arithmetic besides the persistence count
  * (uint16_t, stops at p2135_steps) and the saturating counters.
  * Cost per canfdi_dtcroute_step: one pass over the faults (32 x 2 table
- * reads), one over the DTCs (30 reports at most, each a canfdi_dtc_report),
- * 16 monitor bits. manager_faults: one pass over the faults, a status read
+ * reads), two over the DTCs (32 reports at most each, each a
+ * canfdi_dtc_report), 20 monitor bits. manager_faults: one pass over the faults, a status read
  * per communication fault.
- * Memory: sizeof(canfdi_dtcroute_t) = 108 bytes on a 32-bit target (the
- * index tables 64 + 16, state, config, diagnostics). No heap.
+ * Memory: sizeof(canfdi_dtcroute_t) = 112 bytes on a 32-bit target (the
+ * index tables 64 + 20, state, config, diagnostics). No heap.
  */
 #ifndef CANFDI_DTCROUTE_H
 #define CANFDI_DTCROUTE_H

@@ -131,6 +131,10 @@ const canfdi_dtc_info_t canfdi_dtc_table[] = {
    "DC motor sensor frame implausible signal value (manufacturer code)"},
   {"U1A41", 0xDA4100UL, "check_immediately", "31",
    "Throttle sensor frame implausible signal value (manufacturer code)"},
+  {"U1A50", 0xDA5000UL, "check_immediately", "",
+   "Lost communication with the vehicle controller: setpoint frame timeout (SetpointDcm or SetpointThr) (manufacturer code)"},
+  {"U1A51", 0xDA5100UL, "check_immediately", "",
+   "Invalid data from the vehicle controller: setpoint frame rejected (E2E CRC or rolling counter; length; value out of range) (manufacturer code)"},
 };
 
 const size_t canfdi_dtc_table_len = sizeof canfdi_dtc_table / sizeof canfdi_dtc_table[0];

@@ -112,7 +112,9 @@ extern const size_t canfdi_dtc_table_len;
 #define CANFDI_DTC_U1A31  0xDA3100UL
 #define CANFDI_DTC_U1A40  0xDA4000UL
 #define CANFDI_DTC_U1A41  0xDA4100UL
+#define CANFDI_DTC_U1A50  0xDA5000UL
+#define CANFDI_DTC_U1A51  0xDA5100UL
 
-#define CANFDI_DTC_COUNT 30U
+#define CANFDI_DTC_COUNT 32U
 
 #endif /* CANFDI_FAULTS_H */

@@ -27,6 +27,11 @@ REQUIRED = {
     "SimPlantStatus": 100, "SimFaultInject": None, "SimFaultClear": None,
     "UdsFuncReq": None, "UdsPhysReq": None, "UdsPhysResp": None,
 }
+# The E2E protected frames (dbc/README.md, "E2E protection"): the 1 ms
+# control frames, the vehicle's setpoints (a corrupted throttle setpoint
+# opens the valve) and the ECU's frames a tester or the vehicle acts on.
+E2E_FRAMES = {"DcmSensor", "ThrSensor", "DcmActuator", "ThrActuator", "SetpointDcm", "SetpointThr",
+              "EcuStatus", "EcuDiagnosis", "EcuDtc"}
 # A signal is an enumeration if its name says so or it is a single bit.
 ENUM_NAME = re.compile(r"(FaultId|State\w*|Mode|Bridge\w*|Sel|Enable|Valid|LimpHome|Reason|"
                        r"FaultActive|DtcCode|DtcSts\w+)$")
@@ -106,21 +111,51 @@ def test_standard_ids_and_priorities(db):
     assert uds[0x7E8].senders == ["ECU"] and uds[0x7E0].senders == ["TESTER"]
 
 
-def test_e2e_layout_on_every_1ms_frame(db):
+def signal_bits(s) -> set[int]:
+    """The frame bits (byte * 8 + bit, bit 0 the LSB) a signal occupies."""
+    if s.byte_order == "little_endian":
+        return set(range(s.start, s.start + s.length))
+    bits, pos = set(), s.start   # Motorola: from the MSB, 7..0 of a byte, then the next byte
+    for _ in range(s.length):
+        bits.add(pos)
+        pos = pos + 15 if pos % 8 == 0 else pos - 1
+    return bits
+
+
+def test_e2e_layout_on_every_protected_frame(db):
+    assert {m.name for m in db.messages if attr(m, E2E_ATTR) not in (None, 0)} == E2E_FRAMES
     for m in db.messages:
-        protected = attr(m, E2E_ATTR) not in (None, 0)
-        assert protected == (m.cycle_time == 1), m.name
-        if not protected:
+        if m.cycle_time == 1:
+            assert m.name in E2E_FRAMES, f"{m.name}: every 1 ms control frame is protected"
+        if m.name not in E2E_FRAMES:
+            assert not any(s.name.endswith(("Crc", "Counter")) for s in m.signals), m.name
             continue
         crc = m.get_signal_by_name(m.name + "Crc")
         ctr = m.get_signal_by_name(m.name + "Counter")
         for s, start, length in ((crc, 0, 8), (ctr, 8, 4)):
             assert (s.start, s.length, s.byte_order, s.is_signed) == (start, length, "little_endian", False)
             assert (s.scale, s.offset) == (1, 0)
+        assert "E2E protected" in (m.comment or ""), f"{m.name}: the comment states the protection"
         # the payload leaves byte 0 and the low nibble of byte 1 alone
         for s in m.signals:
             if s not in (crc, ctr):
-                assert s.byte_order == "little_endian" and s.start >= 12, s.name
+                assert min(signal_bits(s)) >= 12, s.name
+
+
+def test_e2e_frames_encode_and_check(db):
+    """cantools encodes every protected frame with its header; e2e.protect
+    fills it in and the Python receiver accepts a sequence of them."""
+    from canfdi import e2e
+    for name in E2E_FRAMES:
+        m = db.get_message_by_name(name)
+        rx = e2e.E2EReceiver(m.frame_id)
+        for k in range(20):
+            values = {s.name: (s.minimum if s.minimum is not None else 0) for s in m.signals}
+            data = e2e.protect(m.frame_id, bytearray(m.encode(values, strict=False)), k)
+            want = e2e.Status.INITIAL if k == 0 else e2e.Status.OK
+            assert rx.check(bytes(data)) == want, name
+            sig = m.decode(bytes(data), decode_choices=False)
+            assert sig[name + "Counter"] == k % 16 and sig[name + "Crc"] == data[0]
 
 
 def test_every_enumeration_has_a_value_table(db):
@@ -192,13 +227,17 @@ def test_dtc_table_matches_catalogue(db):
     from canfdi.catalogue import load_dtcs
     s = db.get_message_by_name("EcuDtc").get_signal_by_name("DtcCode")
     assert {int(k): str(v) for k, v in s.choices.items()} == {d.uds_dtc: d.code for d in load_dtcs()}
-    # the DTC is big-endian as in UDS: bytes 0..2 of the frame read P0122 as 01 22 00
+    # the DTC is big-endian as in UDS: bytes 3..5 of the frame read P0122 as 01 22 00
+    # (bytes 0..1 carry the E2E header, index, count and reason)
     m = db.get_message_by_name("EcuDtc")
     values = {sig.name: 0 for sig in m.signals}
-    values.update(DtcCode=0x012200, DtcStsTestFailed=1, DtcStsConfirmed=1)
+    values.update(DtcCode=0x012200, DtcStsTestFailed=1, DtcStsConfirmed=1, DtcOccurrence=5)
     frame = m.encode(values)
-    assert frame[:3] == bytes((0x01, 0x22, 0x00))
-    assert frame[3] == 0x09  # byte 3 is the UDS status byte: testFailed | confirmedDTC
+    assert frame[3:6] == bytes((0x01, 0x22, 0x00))
+    assert frame[6] == 0x09  # byte 6 is the UDS status byte: testFailed | confirmedDTC
+    assert frame[7] == 5
+    # room for the product's codes: every DTC has an index below the field's top
+    assert m.get_signal_by_name("DtcIndex").maximum + 1 >= len(load_dtcs())
 
 
 def test_codec_roundtrip(db):

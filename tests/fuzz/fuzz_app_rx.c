@@ -15,7 +15,8 @@
  *
  * Invariants after every step: the step succeeds with 2..CANFDI_APP_MAX_TX
  * frames, the actuator frames first; every frame is 8 bytes of an
- * identifier the ECU sends; the actuator frames' E2E CRC is right; every
+ * identifier the ECU sends; the E2E CRC of every protected frame (the
+ * actuators, EcuStatus, EcuDiagnosis, EcuDtc) is right; every
  * signal of every frame sent decodes within its DBC range
  * (fuzz_ranges.c, generated from the DBC); the DTC memory's invariants hold.
  */
@@ -88,7 +89,8 @@ static void step(int32_t jitter_us)
   for (int32_t i = 0; i < n; i++) {
     const char *bad = NULL;
     FZ_CHECK(ecu_sends(out[i].id) && out[i].dlc == 8U, "frame %03X dlc %u", (unsigned)out[i].id, out[i].dlc);
-    if (i < 2) {
+    if ((i < 2) || (out[i].id == CANFDI_MSG_ECU_STATUS_FRAME_ID) ||
+        (out[i].id == CANFDI_MSG_ECU_DIAGNOSIS_FRAME_ID) || (out[i].id == CANFDI_MSG_ECU_DTC_FRAME_ID)) {
       FZ_CHECK(out[i].data[0] == canfdi_e2e_frame_crc((uint16_t)out[i].id, out[i].data, 8U),
                "E2E CRC of %03X", (unsigned)out[i].id);
     }

@@ -2,6 +2,8 @@
 floods of random traffic, live tools, restarts with its NVM file."""
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import shutil
 import subprocess
@@ -14,7 +16,7 @@ import pytest
 
 from hilutil import CHANNEL, ECU, OUT, SCN, SIM, read_frames
 
-from canfdi import inject, watch
+from canfdi import e2e, inject, scenario_run, watch
 from canfdi.hil import Proc, Recorder, start_ecu, start_sim
 from canfdi.timeline import load_db
 
@@ -157,9 +159,10 @@ def test_flood_of_bad_traffic_for_10_s() -> None:
         while len(alive) < 5 and time.monotonic() < t_end:
             m = mon.recv(timeout=1.0)
             # the monitor's queue still holds flood frames; cangen's random
-            # identifiers hit 0x300 too, with any length: only 8-byte frames
-            if m is not None and m.arbitration_id == STATUS.frame_id and len(m.data) == 8:
-                alive.append(STATUS.decode(bytes(m.data))["StsAliveCounter"])
+            # identifiers hit 0x300 too, with any length: only frames that
+            # pass the E2E check are the ECU's (its counter is the alive counter)
+            if m is not None and m.arbitration_id == STATUS.frame_id and e2e.is_valid(STATUS.frame_id, bytes(m.data)):
+                alive.append(STATUS.decode(bytes(m.data))["EcuStatusCounter"])
         assert len(alive) == 5, "EcuStatus stopped after the flood"
         assert len(set(alive)) > 1, alive
         sim.popen.wait(timeout=120)
@@ -228,3 +231,89 @@ def test_dtc_memory_survives_a_restart() -> None:
     assert start2["DtcOccurrence"] == end1["DtcOccurrence"], (start2, end1)
     end2 = [d for d in decoded(logs[1], DTC) if d["DtcCode"] == p0122][-1]
     assert end2["DtcStsTestFailed"] == 0 and end2["DtcStsConfirmed"] == 1, end2
+
+
+def forged(name: str, counter: int, crc_ok: bool, **sig: float) -> str:
+    """A frame of the ECU's for cansend: encoded by cantools, E2E protected
+    with `counter`, its CRC made wrong unless crc_ok."""
+    m = DB.get_message_by_name(name)
+    vals = {s.name: 0 for s in m.signals}
+    vals.update(sig)
+    data = e2e.protect(m.frame_id, bytearray(m.encode(vals, strict=False)), counter)
+    if not crc_ok:
+        data[0] ^= 0x5A
+    return f"{m.frame_id:03X}#{bytes(data).hex().upper()}"
+
+
+def latest_counter(bus: can.BusABC, fid: int) -> int:
+    """The E2E counter of the ECU's newest valid frame `fid` on a bus that
+    receives only the ECU's slow frames: its queue is drained at once (a
+    few frames a second), so the value is at most a frame old."""
+    last = None
+    t_end = time.monotonic() + 5.0
+    while time.monotonic() < t_end:
+        m = bus.recv(timeout=0.0 if last is not None else 0.2)
+        if m is None:
+            if last is not None:
+                return e2e.counter_of(last)
+            continue
+        if m.arbitration_id == fid and e2e.is_valid(fid, bytes(m.data)):
+            last = bytes(m.data)
+    raise AssertionError(f"no valid frame 0x{fid:03X} of the ECU within 5 s")
+
+
+def test_forged_ecu_frames_are_flagged_live_and_in_the_recording(capsys: pytest.CaptureFixture[str]) -> None:
+    """A second node on the bus forges the ECU's identifiers with can-utils
+    while a lockstep bench runs fault-free: EcuDiagnosis and EcuDtc with a
+    wrong CRC (com fault#102 at 193 %, P0222 confirmed), EcuStatus and EcuDtc
+    with a right CRC and a counter 8 ahead of the ECU's (limp-home, U1A00).
+    canfdi-watch on the live bus and on the recording, and canfdi-scenario
+    judging the recording, report each as forged or corrupted and show none
+    of it as a diagnosis, status change or trouble code; the ECU's own frames
+    still decode (no code: the run is fault-free)."""
+    results: dict[str, int] = {}
+
+    def run_watch() -> None:
+        results["live"] = watch.main(["-c", CHANNEL, "--duration", "3.5", "--timeout", "120"])
+    t = threading.Thread(target=run_watch)
+    t.start()
+    time.sleep(1.0)   # the watcher's socket is open
+    log = OUT / "forged.log"
+    dtc = dict(DtcStsTestFailed=1, DtcStsConfirmed=1, DtcStsFailedSinceClear=1, DtcCount=1)
+    slow = can.Bus(interface="socketcan", channel=CHANNEL,
+                   can_filters=[{"can_id": 0x300, "can_mask": 0x7FF}, {"can_id": 0x310, "can_mask": 0x7FF}])
+    try:
+        with Bench(log, NOMINAL, "4") as b:
+            b.mon.wait_step(1000, b.sim)
+            cansend(forged("EcuDiagnosis", 0, False, DiagComFaultId=102, DiagComConfidence=193))
+            cansend(forged("EcuDtc", 0, False, DtcCode=0x022200, **dtc))
+            b.mon.wait_step(1500, b.sim)
+            # a second sequence: 8 ahead of the ECU's newest frame (never in
+            # step with it), sent at once from this socket (starting cansend
+            # takes most of a second in the sandbox: the ECU's counter moves on)
+            for name, sig in (("EcuStatus", dict(StsThrLimpHome=1, StsDegStateThr=2)),
+                              ("EcuDtc", dict(DtcCode=0xDA0000, **dtc))):
+                fid = DB.get_message_by_name(name).frame_id
+                frame = forged(name, latest_counter(slow, fid) + 8, True, **sig)
+                slow.send(can.Message(arbitration_id=fid, data=bytes.fromhex(frame.split("#")[1]),
+                                      is_extended_id=False))
+            b.finish()
+    finally:
+        slow.shutdown()
+    t.join(timeout=150)
+    live = capsys.readouterr().out
+    rec = io.StringIO()
+    with contextlib.redirect_stdout(rec):
+        results["log"] = watch.main(["--log", str(log)])
+        scn = scenario_run.load(NOMINAL, SIM)
+        res = scenario_run.RunResult()
+        scenario_run.evaluate_log(scn, log, res, started=True, lockstep=True)
+    assert results == {"live": 1, "log": 1}, live + rec.getvalue()
+    for out in (live, rec.getvalue()):
+        assert "0x301 EcuDiagnosis forged or corrupted: wrong CRC" in out, out
+        assert "0x310 EcuDtc forged or corrupted: wrong CRC" in out, out
+        assert "0x300 EcuStatus forged or corrupted: counter jump" in out, out
+        assert "0x310 EcuDtc forged or corrupted: counter jump" in out, out
+        for claim in ("fault#102", "193 %", "P0222", "U1A00", "limp-home ON", "-> fail_safe"):
+            assert claim not in out, (claim, out)
+    assert any("ECU frame(s) forged or corrupted" in e for e in res.errors), res.errors

@@ -294,3 +294,89 @@ def test_cantools_test_log_lines(tmp_path: Path) -> None:
     assert lg["frames"] > 0 and dq["bad_line_count"] > 0
     assert lg["frames"] + dq["bad_line_count"] == len(lines)
     assert all(b["why"] for b in dq["bad_lines"])
+
+
+# ------------------------------------------------------------ E2E of recorded frames
+
+def _t(line: str) -> float:
+    return float(line[1:line.index(")")])
+
+
+def test_recorded_setpoints_are_judged_like_the_ecu(nominal_log: Path, tmp_path: Path) -> None:
+    """The recorded setpoints go through the replayed input supervision, E2E
+    included: SetpointThr with a wrong CRC from 6.0 to 6.3 s (a corrupted
+    vehicle link) is rejected and found as U1A51 once debounced (the sixth
+    bad frame after a clean run: the frame class counts from -6 by 2), when
+    the angle held since 5.99 s turns invalid; SetpointDcm missing from 8.0
+    to 8.1 s is U1A50 when the last accepted one is 50 ms old; the rejected
+    frames are in the data quality. The replayed supervisor then drives the
+    valve otherwise than the recorded ECU did (it took the setpoints): the
+    tracking monitor is not judged for that, no P2119."""
+    log = tmp_path / "sp.log"
+    n_bad = 0
+    with nominal_log.open() as f, log.open("w") as g:
+        for line in f:
+            t = _t(line)
+            if " 101#" in line and 6.0 <= t < 6.3:
+                head, data = line.rstrip("\n").split("#")
+                line = f"{head}#{int(data[:2], 16) ^ 0x10:02X}{data[2:]}\n"
+                n_bad += 1
+            if " 100#" in line and 8.0 <= t < 8.1:
+                continue
+            g.write(line)
+    assert n_bad == 30
+    rc, doc, out, _ = run_replay([str(log)], tmp_path)
+    assert doc is not None and rc == 1, out
+    found = {f["code"]: f["first_failed_s"] for f in doc["dtcs"]}
+    assert set(found) == {"U1A50", "U1A51"}, found
+    assert found["U1A51"] == pytest.approx(6.05, abs=1e-6)       # frames at 6.00 .. 6.05
+    assert found["U1A50"] == pytest.approx(8.04, abs=1e-6)       # last one at 7.99
+    rej = doc["data_quality"][0]["rejected_frames"]
+    assert rej["SetpointThr"]["crc"] == 30 and rej["SetpointDcm"]["timeouts"] == 1
+    assert rej["SetpointDcm"]["crc"] == 0 and rej["SetpointThr"]["counter"] == 0
+    spans = {n["monitor"]: n["spans"] for n in doc["not_judged"]}
+    assert any(s["from_s"] <= 6.1 and "otherwise than the replay" in s["why"] for s in spans["thr_tracking"])
+
+
+def test_forged_recorded_ecu_dtc_frames_are_not_the_ecus(ia_log: Path, reference: dict, tmp_path: Path) -> None:
+    """EcuDtc frames another node put on the ECU's identifier (a wrong CRC;
+    a right CRC in a second counter sequence) claiming P0222 and U1A00: the
+    replay's diagnosis is the reference's, the recorded ECU is never said to
+    have reported them, the frames are counted in the data quality."""
+    from canfdi import e2e
+    from canfdi.timeline import load_db
+    dtc = load_db().get_message_by_name("EcuDtc")
+
+    def forged(counter: int, code: int, crc_ok: bool) -> str:
+        vals = {s.name: 0 for s in dtc.signals}
+        vals.update(DtcCode=code, DtcStsTestFailed=1, DtcStsConfirmed=1, DtcStsFailedSinceClear=1, DtcCount=1)
+        data = e2e.protect(0x310, bytearray(dtc.encode(vals)), counter)
+        if not crc_ok:
+            data[0] ^= 0x01
+        return bytes(data).hex().upper()
+
+    log = tmp_path / "forged.log"
+    plan = [(1.0, 0x022200, False), (1.5, 0xDA0000, True), (1.6, 0xDA0000, True)]
+    own = None
+    with ia_log.open() as f, log.open("w") as g:
+        for line in f:
+            g.write(line)
+            if " 310#" in line and plan and _t(line) >= plan[0][0]:
+                t0, code, crc_ok = plan.pop(0)
+                ctr = int(line.split("#")[1][3], 16)        # the low nibble of byte 1
+                if not crc_ok:
+                    counter = (ctr + 8) & 15
+                else:                                        # its own sequence, 8 ahead of the ECU's
+                    own = (ctr + 8) & 15 if own is None else (own + 1) & 15
+                    counter = own
+                g.write(line.split("#")[0] + "#" + forged(counter, code, crc_ok) + "\n")
+    assert not plan
+    rc, doc, out, _ = run_replay([str(log)], tmp_path)
+    assert doc is not None and rc == 1
+    assert [(f["code"], f["first_failed_s"]) for f in doc["dtcs"]] == [(f["code"], f["first_failed_s"])
+                                                                       for f in reference["dtcs"]]
+    assert not any(r["code"] in ("P0222", "U1A00") for r in doc["recorded_ecu_only"])
+    assert "P0222" not in out and "U1A00" not in out
+    # the wrong CRC; two forged in sequence and the ECU's frame after each
+    assert doc["data_quality"][0]["recorded_ecu_dtc_frames_failing_e2e"] == 5
+    assert "5 recorded EcuDtc frame(s) forged or corrupted" in out

@@ -7,8 +7,9 @@ tools/canfdi/e2e.py) and records every frame it sees, in bus order.
     build/hil/canfdi-sim --can vcan0 -d 1
 
 Options follow python-can (-i/--interface, -c/--channel). It can also send
-a fault injection and a setpoint override before answering a given step
-(--inject-at K), which the tests use to check that the sim obeys them.
+a fault injection and a setpoint override (E2E protected, counter 0) before
+answering a given step (--inject-at K), which the tests use to check that
+the sim obeys them.
 Prints `responder: ready on CHANNEL` on stderr once the bus is open.
 """
 from __future__ import annotations
@@ -42,6 +43,7 @@ class Responder:
     dcm_ua_V: float = 12.0
     thr_u_V: float = 1.0
     record: list[can.Message] = field(default_factory=list)
+    own: list[can.Message] = field(default_factory=list)   # the frames it sent itself
     answered: int = 0
     step_indices: list[int] = field(default_factory=list)
     stop: threading.Event = field(default_factory=threading.Event)
@@ -70,13 +72,15 @@ class Responder:
             can.Message(arbitration_id=inj.frame_id, is_extended_id=False, data=inj.encode(
                 {"InjFaultId": 10, "InjMode": 0, "InjDuty": 0, "InjMagnitude": 1.0,
                  "InjRampOrPeriod": 0.0, "InjStartDelay": 0.05})),
-            can.Message(arbitration_id=sp.frame_id, is_extended_id=False, data=sp.encode(
-                {"SpDcmSpeed": 123.0, "SpDcmLoad": 0.5})),
+            can.Message(arbitration_id=sp.frame_id, is_extended_id=False, data=protect(sp.frame_id, bytearray(
+                sp.encode({"SetpointDcmCrc": 0, "SetpointDcmCounter": 0, "SpDcmSpeed": 123.0, "SpDcmLoad": 0.5})),
+                0)),
         ]
 
     def _send(self, msg: can.Message) -> None:
         self.bus.send(msg)
         self.record.append(msg)  # own frames are not looped back to this socket
+        self.own.append(msg)
 
     def run(self) -> None:
         while not self.stop.is_set():

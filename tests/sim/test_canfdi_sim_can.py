@@ -200,6 +200,13 @@ def test_lockstep_injection_and_override(tmp_path: Path, responder, db) -> None:
             sp[k] = db.decode_message(i, m.data)
         elif i == STATUS:
             status[k] = db.decode_message(i, m.data, decode_choices=False)
+    # the sim's setpoints are E2E protected, one sequence per identifier, the
+    # override included (it sends it on in its own sequence)
+    from canfdi import e2e
+    rx = {i: e2e.E2EReceiver(i) for i in (SP_DCM, SP_THR)}
+    sent = [m for m in r.record if m.arbitration_id in rx and not any(m is o for o in r.own)]
+    got = [rx[m.arbitration_id].check(bytes(m.data)) for m in sent]
+    assert got[:2] == [e2e.Status.INITIAL, e2e.Status.INITIAL] and set(got[2:]) == {e2e.Status.OK}, got
     assert all(v["SpDcmSpeed"] != pytest.approx(123.0) for s, v in sp.items() if s <= 20)
     assert all(v["SpDcmSpeed"] == pytest.approx(123.0) and v["SpDcmLoad"] == pytest.approx(0.5)
                for s, v in sp.items() if s >= 30)

@@ -126,3 +126,53 @@ class Replayer(threading.Thread):
 
 def sil_msgs(log: Path) -> list[can.Message]:
     return list(read_log(log))
+
+
+def forge_ecu_frames(msgs: list[can.Message], actuator: bool = True) -> list[can.Message]:
+    """A node forging the ECU's identifiers into a SIL log of tps1_open.scn
+    (P0122 at 3.009 s), each frame inserted right after the ECU's own frame
+    of that identifier:
+      1.0 s  EcuDiagnosis, right ID, wrong CRC: com fault#102 at 193 %
+      1.2 s  DcmActuator, right CRC, its own counter (8 ahead): bridge B
+      1.5 s  EcuDtc, wrong CRC: P0222 confirmed
+      2.0 s  EcuStatus x3, right CRC, a second counter sequence (8 ahead of
+             the ECU's, +1 each): fail_safe, bridge none, limp-home
+      2.5 s  EcuDtc x2, the same: U1A00 testFailed and confirmed
+    Returns the new list; the ECU's frames are untouched."""
+    from canfdi import e2e
+    db = load_db()
+    diag, dtc, sts, act = (db.get_message_by_name(n) for n in ("EcuDiagnosis", "EcuDtc", "EcuStatus", "DcmActuator"))
+
+    def frame(m, crc_ok: bool, counter: int, **sig: float) -> bytearray:
+        vals = {s.name: 0 for s in m.signals}
+        vals.update(sig)
+        data = e2e.protect(m.frame_id, bytearray(m.encode(vals, strict=False)), counter)
+        if not crc_ok:
+            data[0] ^= 0x5A
+        return data
+
+    dtc_sts = dict(DtcStsTestFailed=1, DtcStsTestFailedThisOpCycle=1, DtcStsConfirmed=1, DtcStsFailedSinceClear=1)
+    # (from s, id, how many, right CRC?, signals)
+    plan = [(1.0, 0x301, 1, False, dict(DiagComFaultId=102, DiagComConfidence=193)),
+            (1.5, 0x310, 1, False, dict(DtcCode=0x022200, DtcCount=1, **dtc_sts)),
+            (2.0, 0x300, 3, True, dict(StsDegStateDcm=2, StsDegStateThr=2, StsActiveBridge=0, StsThrLimpHome=1)),
+            (2.5, 0x310, 2, True, dict(DtcCode=0xDA0000, DtcCount=1, **dtc_sts))]
+    if actuator:
+        plan.append((1.2, 0x020, 1, True, dict(DcmBridgeSel=2, DcmEnable=1, DcmUaCmd=10.0)))
+    msg_of = {0x300: sts, 0x301: diag, 0x310: dtc, 0x020: act}
+    left = {i: p[2] for i, p in enumerate(plan)}
+    own: dict[int, int] = {}       # a forger's next counter per id
+    out: list[can.Message] = []
+    for m in msgs:
+        out.append(m)
+        fid = m.arbitration_id
+        for i, (t0, pid, _, crc_ok, sig) in enumerate(plan):
+            if pid != fid or left[i] == 0 or m.timestamp < t0:
+                continue
+            ctr = own.setdefault(i, (e2e.counter_of(bytes(m.data)) + 8) & 0x0F)
+            own[i] = ctr + 1
+            left[i] -= 1
+            out.append(can.Message(timestamp=m.timestamp, arbitration_id=fid, is_extended_id=False,
+                                   data=frame(msg_of[fid], crc_ok, ctr, **sig), channel=m.channel))
+    assert not any(left.values()), left
+    return out

@@ -58,6 +58,15 @@ def test_clear_and_setpoints_round_trip() -> None:
     assert decode(thr.msg)["SpThrAngle"] == pytest.approx(33.3, abs=0.002)
     with pytest.raises(UsageError, match="speed and load together"):
         setpoint_frames(speed=100.0)
+    # E2E protected like the vehicle's: right CRC over the data ID, the counter given
+    from canfdi import e2e
+    for fr in (dcm, thr):
+        data = bytes(fr.msg.data)
+        assert e2e.is_valid(fr.msg.arbitration_id, data) and e2e.counter_of(data) == 0
+    (thr7,) = setpoint_frames(angle=10.0, counter=7)
+    assert e2e.is_valid(0x101, bytes(thr7.msg.data)) and e2e.counter_of(bytes(thr7.msg.data)) == 7
+    with pytest.raises(UsageError, match="0..15"):
+        setpoint_frames(angle=10.0, counter=16)
 
 
 def test_cli_sends_on_virtual_bus(channel: str, capsys: pytest.CaptureFixture[str]) -> None:

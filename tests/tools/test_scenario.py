@@ -14,7 +14,7 @@ from canfdi.hil import ProcError, start_ecu, start_sim
 from canfdi.scenario_file import ScenarioError, check_with_c, parse
 from canfdi.scenario_run import main
 
-from conftest import Replayer, as_lockstep, sil_msgs
+from conftest import Replayer, as_lockstep, forge_ecu_frames, sil_msgs
 
 STUB_ECU = """#!{py}
 import signal, sys, time
@@ -203,6 +203,31 @@ def test_no_start_lost_steps_are_an_error(sil_run, channel: str, tmp_path: Path,
     assert rc == 1
     assert any("2 SimStep frame(s) lost" in e for e in res["errors"])
     assert "ERROR recording incomplete: 2 SimStep frame(s) lost" in capsys.readouterr().out
+
+
+def test_no_start_forged_ecu_frames_fail_the_run(sil_run, channel: str, tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """A node forging the ECU's status, diagnosis and trouble-code frames on
+    the bus of a run (wrong CRC; right CRC, second counter sequence): the
+    timeline lists each as forged or corrupted and shows none of it as a
+    diagnosis, degradation or code; the run fails with an error naming the
+    frames, whatever its expectations say."""
+    run = sil_run("tps1_open")
+    rc, res = run_no_start(channel, forge_ecu_frames(sil_msgs(run.log), actuator=False), tmp_path, str(run.rel))
+    out = capsys.readouterr().out
+    assert rc == 1, out
+    assert all(e["ok"] for e in res["expectations"]) and not res["unexpected"]
+    assert [e for e in res["errors"] if "forged or corrupted" in e] == res["errors"]
+    assert res["errors"][0].startswith("12 ECU frame(s) forged or corrupted (E2E check failed, not decoded): "
+                                       "0x300 EcuStatus 6 (counter 6); 0x301 EcuDiagnosis 1 (CRC 1); "
+                                       "0x310 EcuDtc 5 (CRC 1, counter 4)")
+    assert res["e2e_failures"] == {"0x300": {"counter": 6}, "0x301": {"CRC": 1}, "0x310": {"CRC": 1, "counter": 4}}
+    assert set(res["codes"]) == {"P0122"}
+    assert "0x301 EcuDiagnosis forged or corrupted: wrong CRC" in out
+    assert "0x300 EcuStatus forged or corrupted: counter jump" in out
+    for claim in ("fault#102", "193 %", "P0222", "U1A00", "limp-home ON", "-> fail_safe"):
+        assert claim not in out, claim
+    assert "ERROR 12 ECU frame(s) forged or corrupted" in out
 
 
 def test_missing_programs_and_bad_scenario_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

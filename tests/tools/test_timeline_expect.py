@@ -164,13 +164,47 @@ def test_corrupt_log_lines_are_counted_not_fatal(sil_run, tmp_path: Path) -> Non
 
 def test_undecodable_frames_are_counted() -> None:
     tl = Timeline()
-    tl.feed(can.Message(timestamp=0.001, arbitration_id=0x310, data=b"\x01\x02\x03", is_extended_id=False))
+    tl.feed(can.Message(timestamp=0.001, arbitration_id=0x200, data=b"\x01\x02\x03", is_extended_id=False))
     tl.feed(can.Message(timestamp=0.002, arbitration_id=0x7AB, data=b"\x00" * 8, is_extended_id=False))
-    tl.feed(can.Message(timestamp=0.003, arbitration_id=0x300, data=b"\xff" * 8, is_extended_id=False))
+    tl.feed(can.Message(timestamp=0.003, arbitration_id=0x302, data=b"\xff" * 8, is_extended_id=False))
     tl.feed(can.Message(timestamp=0.004, is_error_frame=True))
     s = tl.stats
-    assert (s.frames, s.undecodable, s.unknown_id, s.error_frames) == (4, 1, 1, 1)
-    assert "0x310 [3]" in s.first_undecodable
+    assert (s.frames, s.undecodable, s.unknown_id, s.error_frames, s.e2e_bad) == (4, 1, 1, 1, 0)
+    assert "0x200 [3]" in s.first_undecodable
+
+
+def test_ecu_frames_failing_e2e_are_not_decoded() -> None:
+    """The ECU's protected frames: a wrong length or CRC, a repeated counter,
+    a jump: counted per identifier and kind, listed as forged, not decoded;
+    the frames of the ECU's own sequence around them are."""
+    from canfdi import e2e
+    tl = Timeline()
+    sts = tl.db.get_message_by_name("EcuStatus")
+
+    def status(counter: int, limp: int) -> bytes:
+        vals = {s.name: 0 for s in sts.signals}
+        vals["StsThrLimpHome"] = limp
+        return bytes(e2e.protect(0x300, bytearray(sts.encode(vals)), counter))
+
+    def feed(t: float, data: bytes) -> None:
+        tl.feed(can.Message(timestamp=t, arbitration_id=0x300, data=data, is_extended_id=False))
+    feed(0.1, status(3, 0))
+    feed(0.2, b"\x01\x02\x03")                          # length
+    feed(0.3, bytes([status(4, 1)[0] ^ 1]) + status(4, 1)[1:])  # CRC
+    feed(0.4, status(4, 0))                               # in sequence: taken
+    feed(0.5, status(4, 1))                               # repeated
+    feed(0.6, status(9, 1))                               # jump 4 -> 9
+    feed(0.7, status(10, 1))                              # the new sequence, in step: taken
+    s = tl.stats
+    assert (s.e2e_checked, s.e2e_bad, s.undecodable) == (7, 4, 0)
+    assert s.e2e_bad_by_id == {0x300: {"length": 1, "CRC": 1, "counter": 2}}
+    lines = [e.text for e in tl.events]
+    assert lines[:4] == ["0x300 EcuStatus forged or corrupted: length 3, 8 expected (not decoded)",
+                         f"0x300 EcuStatus forged or corrupted: wrong CRC 0x{status(4, 1)[0] ^ 1:02X} "
+                         f"(0x{status(4, 1)[0]:02X} expected) (not decoded)",
+                         "0x300 EcuStatus forged or corrupted: counter 4 repeated (not decoded)",
+                         "0x300 EcuStatus forged or corrupted: counter jump 4 -> 9 (not decoded)"]
+    assert lines[4:] == ["ecu: throttle limp-home ON"]   # only from the frame taken at 0.7 s
 
 
 def test_other_log_formats_through_can_logreader(sil_run, tmp_path: Path) -> None:

@@ -9,7 +9,7 @@ import pytest
 
 from canfdi.watch import main
 
-from conftest import Replayer, as_lockstep, sil_msgs
+from conftest import Replayer, as_lockstep, forge_ecu_frames, sil_msgs
 
 
 @pytest.mark.parametrize("args,rc,needle", [
@@ -69,3 +69,59 @@ def test_live_virtual_bus(sil_run, channel: str, capsys: pytest.CaptureFixture[s
     assert rc == 0, out
     assert "PASS  P0122 appeared at 3.009 s" in out
     assert "listening on virtual" in out
+
+
+#: What the forged frames of forge_ecu_frames would have shown, decoded as
+#: if they were the ECU's: none of it may appear.
+FORGED_CLAIMS = ("fault#102", "193 %", "P0222", "U1A00", "power stage A -> B", "power stage A -> none",
+                 "degradation dcm", "-> fail_safe", "limp-home ON")
+
+
+def write_log(msgs, path: Path) -> Path:
+    with path.open("w") as f:
+        for m in msgs:
+            f.write(f"({m.timestamp:.6f}) vcan0 {m.arbitration_id:03X}#{bytes(m.data).hex().upper()}\n")
+    return path
+
+
+def assert_flagged_not_decoded(out: str) -> None:
+    """The forged frames are listed with identifier and reason, nothing of
+    their content is shown; the ECU's own diagnosis still is."""
+    assert "0x301 EcuDiagnosis forged or corrupted: wrong CRC" in out
+    assert "0x310 EcuDtc forged or corrupted: wrong CRC" in out
+    assert "0x300 EcuStatus forged or corrupted: counter jump" in out     # a second counter sequence
+    assert "0x310 EcuDtc forged or corrupted: counter jump" in out
+    for claim in FORGED_CLAIMS:
+        assert claim not in out, claim
+    assert "P0122 confirmed" in out and "diagnosis thr: thr_tps1_open (100 % confidence)" in out
+
+
+def test_forged_ecu_frames_in_a_log_are_flagged(sil_run, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A node forging the ECU's identifiers (EcuDiagnosis, EcuDtc with a wrong
+    CRC; EcuStatus, EcuDtc with a right CRC but a second counter sequence; a
+    DcmActuator out of sequence): every such frame is reported as forged or
+    corrupted with its identifier and reason, never as a diagnosis, status
+    change, power-stage switch or trouble code; the watch fails."""
+    log = write_log(forge_ecu_frames(sil_msgs(sil_run("tps1_open").log)), tmp_path / "forged.log")
+    assert main(["--log", str(log)]) == 1
+    out = capsys.readouterr().out
+    assert_flagged_not_decoded(out)
+    assert "0x020 DcmActuator forged or corrupted: counter jump 0 -> 8" in out
+    assert "FAIL  14 ECU frame(s) forged or corrupted (E2E check failed, not decoded): 0x020 DcmActuator 2 " in out
+    # a check that holds still fails on the forged frames; -q keeps the verdicts
+    assert main(["--log", str(log), "-q", "--forbid", "P0222"]) == 1
+    out = capsys.readouterr().out
+    assert "PASS  none of P0222 appeared" in out and "FAIL  14 ECU frame(s) forged or corrupted" in out
+    # the untouched log passes
+    assert main(["--log", str(sil_run("tps1_open").log), "-q", "--forbid", "P0222"]) == 0
+
+
+def test_forged_ecu_frames_live_are_flagged(sil_run, channel: str, capsys: pytest.CaptureFixture[str]) -> None:
+    msgs = forge_ecu_frames(sil_msgs(sil_run("tps1_open").log))
+    rp = Replayer(channel, as_lockstep(msgs), listeners=2)
+    rp.start()
+    rc = main(["-i", "virtual", "-c", channel, "--duration", "5.9", "--timeout", "60"])
+    rp.join(timeout=60)
+    out = capsys.readouterr().out
+    assert rc == 1, out
+    assert_flagged_not_decoded(out)

@@ -9,6 +9,8 @@
 #include <string.h>
 
 #include "app/canfdi_app.h"
+#include "comm/canfdi_e2e.h"
+#include "gen/canfdi_sim_msg.h"
 #include "unit_main.h"
 
 static canfdi_app_t app; /* ~9 kB: static, as on a target */
@@ -217,8 +219,8 @@ START_TEST(test_self_diag_saturates)
 END_TEST
 
 /* Port timing: the maximum since the last EcuStatus goes out in the next
- * one (StsStepTimeMax bits 32..43, StsCycleTimeMax 44..55), then a new
- * maximum starts; never reported (SIL, lockstep): 0. */
+ * one (StsStepTimeMax bits 41..51, StsCycleTimeMax 52..62, in 2 us units),
+ * then a new maximum starts; never reported (SIL, lockstep): 0. */
 START_TEST(test_port_timing)
 {
   canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
@@ -231,14 +233,14 @@ START_TEST(test_port_timing)
     const int32_t n = canfdi_app_step(&app, k * 1000U, out);
     for (int32_t i = 0; i < n; i++) {
       if (out[i].id == 0x300U) {
-        const uint32_t step = field_le(&out[i], 32U, 12U);
-        const uint32_t cycle = field_le(&out[i], 44U, 12U);
+        const uint32_t step = 2U * field_le(&out[i], 41U, 11U);
+        const uint32_t cycle = 2U * field_le(&out[i], 52U, 11U);
         ck_assert_uint_eq(k % 100U, 4U);
         if (k == 104U) {
           ck_assert_uint_eq(step, 250U);
           ck_assert_uint_eq(cycle, 1500U);
         } else if (k == 304U) {
-          ck_assert_uint_eq(step, 4095U); /* saturated */
+          ck_assert_uint_eq(step, 4094U); /* saturated */
           ck_assert_uint_eq(cycle, 1000U);
         } else {
           ck_assert_uint_eq(step, 0U);
@@ -261,18 +263,19 @@ START_TEST(test_port_timing)
 }
 END_TEST
 
-/* SetpointDcm with raw speed and load (DBC: both signed 16 bit, little
- * endian, bits 0..15 and 16..31). */
+/* SetpointDcm with raw speed and load, packed by the generated codec and
+ * E2E protected in its own sequence (sp_e2e, started by the test). */
+static canfdi_e2e_tx_t sp_e2e;
+
 static void send_sp_dcm(int16_t speed_raw, int16_t load_raw, uint32_t now_us)
 {
   uint8_t d[8];
-  const uint16_t s = (uint16_t)speed_raw;
-  const uint16_t l = (uint16_t)load_raw;
-  memset(d, 0, sizeof d);
-  d[0] = (uint8_t)(s & 0xFFU);
-  d[1] = (uint8_t)(s >> 8);
-  d[2] = (uint8_t)(l & 0xFFU);
-  d[3] = (uint8_t)(l >> 8);
+  struct canfdi_sim_msg_setpoint_dcm_t m;
+  memset(&m, 0, sizeof m);
+  m.sp_dcm_speed = speed_raw;
+  m.sp_dcm_load = load_raw;
+  ck_assert_int_eq(canfdi_sim_msg_setpoint_dcm_pack(d, &m, 8U), 8);
+  ck_assert_int_eq(canfdi_e2e_protect(&sp_e2e, d, 8U), CANFDI_OK);
   (void)canfdi_app_rx_frame(&app, 0x100U, d, 8U, now_us);
 }
 
@@ -291,6 +294,7 @@ START_TEST(test_load_feed_forward)
   canfdi_app_default_cal(&cal);
   d07 = (int32_t)((700 * 65536 + 500) / 1000) - cal.load_nom_Nm_q16;
   ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+  canfdi_e2e_tx_init(&sp_e2e, 0x100U);
   ck_assert_int_eq(canfdi_app_step(&app, 1000U, out) >= 2, 1);
   ck_assert_int_eq(dload_q16(), 0);
   for (k = 2U; k <= 100U; k++) {

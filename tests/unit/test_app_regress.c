@@ -12,6 +12,11 @@
  *     compares the measured armature voltage with what was applied (no
  *     false dead-bridge code when the sensor node starts with a bad
  *     current signal);
+ *   - the setpoints' supervision in closed loop: a corrupted (wrong CRC),
+ *     forged (a second counter sequence) or missing setpoint frame is
+ *     rejected and counted, the last accepted setpoint held for 50 ms, then
+ *     the safe reaction (motor braked to standstill, valve to limp-home),
+ *     U1A51 / U1A50; good frames restore the setpoints;
  *   - the commands another controller applied (canfdi_app_set_applied, a
  *     replay of a recording): the application's own commands given back
  *     change no frame; an unknown throttle command stops the throttle's
@@ -27,12 +32,14 @@
  * codec and the tester codec of the SIL rig), never by hand.
  */
 #include <check.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "app/canfdi_app.h"
 #include "canfdi_sil_msg.h"
 #include "canfdi_sim_rig.h"
 #include "comm/canfdi_e2e.h"
+#include "core/canfdi_qconst.h"
 #include "gen/canfdi_sim_msg.h"
 #include "unit_main.h"
 
@@ -43,6 +50,9 @@ static canfdi_sim_t sim;
 static canfdi_sim_rig_t rig;
 /* Called before every ECU step of loop_step when set (the replay's hook). */
 static void (*before_step)(void);
+/* Given every setpoint frame of the rig before the ECU gets it when set:
+ * may change it; false drops it (the vehicle's link, tampered with). */
+static bool (*sp_tamper)(canfdi_sim_frame_t *f);
 
 static void loop_start(const char *text)
 {
@@ -54,6 +64,7 @@ static void loop_start(const char *text)
   canfdi_app_default_cal(&cal);
   ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
   before_step = NULL;
+  sp_tamper = NULL;
 }
 
 /* One lockstep step as the SIL rig runs it: the plant's and the vehicle's
@@ -68,8 +79,11 @@ static int32_t loop_step(canfdi_tx_frame_t *out)
   int32_t n;
   for (j = 0U; j < npf; j++) {
     const uint32_t id = pf[j].id;
-    if ((id == CANFDI_SIL_MSG_DCM_SENSOR_FRAME_ID) || (id == CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID) ||
-        (id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) || (id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID)) {
+    const bool sp = (id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) || (id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID);
+    if (sp && (sp_tamper != NULL) && !sp_tamper(&pf[j])) {
+      continue;
+    }
+    if ((id == CANFDI_SIL_MSG_DCM_SENSOR_FRAME_ID) || (id == CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID) || sp) {
       (void)canfdi_app_rx_frame(&app, id, pf[j].data, pf[j].dlc, now_us);
     }
   }
@@ -235,10 +249,12 @@ START_TEST(test_startup_hold_off_is_what_the_manager_applied)
 {
   canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
   canfdi_e2e_tx_t e2e;
+  canfdi_e2e_tx_t e2e_sp;
   uint32_t k;
   canfdi_app_default_cal(&cal);
   ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
   canfdi_e2e_tx_init(&e2e, (uint16_t)CANFDI_SIM_MSG_DCM_SENSOR_FRAME_ID);
+  canfdi_e2e_tx_init(&e2e_sp, (uint16_t)CANFDI_SIM_MSG_SETPOINT_DCM_FRAME_ID);
   for (k = 1U; k <= 30U; k++) {
     struct canfdi_sim_msg_dcm_sensor_t m;
     struct canfdi_sim_msg_setpoint_dcm_t sp;
@@ -252,10 +268,13 @@ START_TEST(test_startup_hold_off_is_what_the_manager_applied)
     ck_assert_int_eq(canfdi_e2e_protect(&e2e, d, 8U), CANFDI_OK);
     (void)canfdi_app_rx_frame(&app, CANFDI_SIM_MSG_DCM_SENSOR_FRAME_ID, d, 8U, k * 1000U);
     if ((k % 10U) == 1U) {
+      memset(&sp, 0, sizeof sp);
       sp.sp_dcm_speed = canfdi_sim_msg_setpoint_dcm_sp_dcm_speed_encode(100.0);
       sp.sp_dcm_load = canfdi_sim_msg_setpoint_dcm_sp_dcm_load_encode(1.2);
       ck_assert_int_eq(canfdi_sim_msg_setpoint_dcm_pack(d, &sp, 8U), 8);
-      (void)canfdi_app_rx_frame(&app, CANFDI_SIM_MSG_SETPOINT_DCM_FRAME_ID, d, 8U, k * 1000U);
+      ck_assert_int_eq(canfdi_e2e_protect(&e2e_sp, d, 8U), CANFDI_OK);
+      ck_assert_int_eq(canfdi_app_rx_frame(&app, CANFDI_SIM_MSG_SETPOINT_DCM_FRAME_ID, d, 8U, k * 1000U),
+                       CANFDI_RX_ACCEPTED);
     }
     ck_assert_int_ge(canfdi_app_step(&app, k * 1000U, out), 2);
   }
@@ -269,6 +288,148 @@ START_TEST(test_startup_hold_off_is_what_the_manager_applied)
 }
 END_TEST
 
+
+/* ------------------------------------------------ setpoint supervision */
+
+static unsigned tampered;           /* setpoint frames changed or dropped */
+static canfdi_e2e_tx_t forger;      /* a second sender's own sequence */
+
+/* SetpointThr forged wide open (80 deg), its CRC wrong: a corruption. */
+static bool thr_sp_bad_crc(canfdi_sim_frame_t *f)
+{
+  if (f->id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID) {
+    struct canfdi_sim_msg_setpoint_thr_t m;
+    memset(&m, 0, sizeof m);
+    m.sp_thr_angle = canfdi_sim_msg_setpoint_thr_sp_thr_angle_encode(80.0);
+    ck_assert_int_eq(canfdi_sim_msg_setpoint_thr_pack(f->data, &m, 8U), 8);
+    f->data[0] = (uint8_t)(canfdi_e2e_frame_crc((uint16_t)f->id, f->data, 8U) ^ 0x5AU);
+    tampered++;
+  }
+  return true;
+}
+
+/* A second sender on SetpointDcm's identifier: every 10 ms, just before
+ * the vehicle's frame, its own frame, 300 rad/s with a right CRC and a
+ * counter sequence of its own (8 ahead of the vehicle's, both +1 per
+ * 10 ms). */
+static bool dcm_sp_second_sender(canfdi_sim_frame_t *f)
+{
+  if (f->id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) {
+    struct canfdi_sim_msg_setpoint_dcm_t m;
+    uint8_t d[8];
+    memset(&m, 0, sizeof m);
+    m.sp_dcm_speed = canfdi_sim_msg_setpoint_dcm_sp_dcm_speed_encode(300.0);
+    m.sp_dcm_load = canfdi_sim_msg_setpoint_dcm_sp_dcm_load_encode(1.2);
+    ck_assert_int_eq(canfdi_sim_msg_setpoint_dcm_pack(d, &m, 8U), 8);
+    ck_assert_int_eq(canfdi_e2e_protect(&forger, d, 8U), CANFDI_OK);
+    (void)canfdi_app_rx_frame(&app, f->id, d, 8U, (uint32_t)canfdi_sim_time_us(&sim));
+    tampered += 2U; /* the forged frame and the vehicle's */
+  }
+  return true;
+}
+
+/* Both setpoint frames lost. */
+static bool sp_lost(canfdi_sim_frame_t *f)
+{
+  (void)f;
+  tampered++;
+  return false;
+}
+
+#define DEG_Q16(d) CANFDI_Q16_DEG((d), 1)
+
+static int32_t valve_rad_q16(void) { return app.vote_out.angle_rad_q16; }
+static int32_t speed_q16(void) { return canfdi_rx_value(&app.rx, CANFDI_RX_IN_DCM_OMEGA); }
+static bool dtc_failed(uint32_t code)
+{
+  const int32_t i = canfdi_dtc_find(canfdi_app_dtc(&app), code);
+  ck_assert_int_ge(i, 0);
+  return (canfdi_dtc_status(canfdi_app_dtc(&app), (uint8_t)i) & (int32_t)CANFDI_DTC_ST_TF) != 0;
+}
+
+/* Closed loop at 100 rad/s and 20 deg. A wide-open throttle setpoint with
+ * a wrong CRC is rejected: the valve holds 20 deg for 50 ms, then goes to
+ * its limp-home angle (6.5 deg), never towards 80 deg; U1A51, frames
+ * counted in the self-diagnostics. A second sender on SetpointDcm (right
+ * CRC, own counter sequence, 300 rad/s): counter errors, the motor braked
+ * to standstill. Both frames lost: U1A50 after 50 ms. Good frames again:
+ * both setpoints restored. No catalogue fault, no degradation. */
+START_TEST(test_setpoint_supervision_safe_reaction)
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t rej0;
+  uint32_t k;
+  int32_t valve_max = 0;
+  int32_t speed_max = 0;
+  loop_start(fault_free_scn);
+  loop_run(4000U); /* the first 2.5 s carry the estimators' test signals */
+  ck_assert_int_lt(abs(valve_rad_q16() - DEG_Q16(20)), DEG_Q16(1));
+  ck_assert_int_lt(abs(speed_q16() - 100 * 65536), 3 * 65536);
+  ck_assert(!dtc_failed(CANFDI_DTC_U1A51) && !dtc_failed(CANFDI_DTC_U1A50));
+  rej0 = canfdi_app_diag(&app)->frames_rejected;
+  /* 1. SetpointThr corrupted (the rig's next one is due at a 10 ms tick) */
+  tampered = 0U;
+  sp_tamper = thr_sp_bad_crc;
+  for (k = 0U; k < 1000U; k++) {
+    (void)loop_step(out);
+    valve_max = (valve_rad_q16() > valve_max) ? valve_rad_q16() : valve_max;
+    /* the last good frame came at -10 ms: held while younger than 50 ms */
+    ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality,
+                      (k < 40U) ? CANFDI_RX_SUBSTITUTED : CANFDI_RX_INVALID);
+    if (k < 40U) {
+      ck_assert_int_lt(abs(canfdi_rx_value(&app.rx, CANFDI_RX_IN_SP_THR_ANGLE) - DEG_Q16(20)), DEG_Q16(1) / 100);
+    }
+  }
+  ck_assert_int_lt(valve_max, DEG_Q16(21));                                   /* never opened */
+  ck_assert_int_lt(abs(valve_rad_q16() - cal.ctrl_thr.limp_home_rad_q16), DEG_Q16(1)); /* limp-home */
+  ck_assert(dtc_failed(CANFDI_DTC_U1A51));
+  ck_assert(!dtc_failed(CANFDI_DTC_U1A50)); /* the frames came */
+  ck_assert_uint_eq(canfdi_app_diag(&app)->frames_rejected - rej0, tampered);
+  ck_assert_uint_eq(app.rx.diag.crc_err[CANFDI_RX_F_SP_THR], tampered);
+  ck_assert_int_lt(abs(speed_q16() - 100 * 65536), 8 * 65536); /* the motor's setpoint is untouched */
+  ck_assert_uint_eq(app.fb.mgr.dcm_state, CANFDI_DEG_NORMAL);
+  ck_assert_uint_eq(app.fb.mgr.thr_state, CANFDI_DEG_NORMAL);
+  /* 2. good frames: the valve follows its setpoint again (the test
+   * signals may run again meanwhile: +-3 deg) */
+  sp_tamper = NULL;
+  loop_run(1000U);
+  ck_assert_int_lt(abs(valve_rad_q16() - DEG_Q16(20)), DEG_Q16(4));
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_VALID);
+  /* 3. a second sender on SetpointDcm */
+  canfdi_e2e_tx_init(&forger, (uint16_t)CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID);
+  forger.counter = (uint8_t)((rig.sp_e2e[0].counter + 8U) & 15U);
+  tampered = 0U;
+  rej0 = app.rx.diag.counter_err[CANFDI_RX_F_SP_DCM];
+  sp_tamper = dcm_sp_second_sender;
+  for (k = 0U; k < 2000U; k++) {
+    (void)loop_step(out);
+    speed_max = (speed_q16() > speed_max) ? speed_q16() : speed_max;
+  }
+  ck_assert_int_lt(speed_max, 108 * 65536); /* never towards 300 rad/s */
+  ck_assert_int_lt(abs(speed_q16()), 3 * 65536); /* braked to standstill */
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_DCM_SPEED].quality, CANFDI_RX_INVALID);
+  ck_assert_uint_eq(app.rx.diag.counter_err[CANFDI_RX_F_SP_DCM] - rej0, tampered);
+  ck_assert(dtc_failed(CANFDI_DTC_U1A51));
+  /* 4. both lost: U1A50 after the 50 ms window, not before */
+  sp_tamper = NULL;
+  loop_run(1000U);
+  ck_assert_int_lt(abs(speed_q16() - 100 * 65536), 8 * 65536);
+  sp_tamper = sp_lost;
+  for (k = 0U; (k < 200U) && !dtc_failed(CANFDI_DTC_U1A50); k++) {
+    (void)loop_step(out);
+  }
+  ck_assert_uint_ge(k, 40U);
+  ck_assert_uint_le(k, 60U);
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_DCM_SPEED].quality, CANFDI_RX_INVALID);
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_INVALID);
+  sp_tamper = NULL;
+  loop_run(20U);
+  ck_assert(!dtc_failed(CANFDI_DTC_U1A50));
+  ck_assert_uint_eq(app.rx.in[CANFDI_RX_IN_SP_DCM_SPEED].quality, CANFDI_RX_VALID);
+  /* none of it is a plant fault */
+  ck_assert_uint_eq(canfdi_dtc_count_by_mask(canfdi_app_dtc(&app), (uint8_t)CANFDI_DTC_ST_TFSLC), 2U);
+}
+END_TEST
 
 /* ------------------------------------------------ canfdi_app_set_applied */
 
@@ -439,6 +600,10 @@ static Suite *make_suite(void)
   suite_add_tcase(s, tc);
   tc = tcase_create("startup");
   tcase_add_test(tc, test_startup_hold_off_is_what_the_manager_applied);
+  suite_add_tcase(s, tc);
+  tc = tcase_create("setpoints");
+  tcase_set_timeout(tc, 120);
+  tcase_add_test(tc, test_setpoint_supervision_safe_reaction);
   suite_add_tcase(s, tc);
   tc = tcase_create("replay");
   tcase_set_timeout(tc, 120);

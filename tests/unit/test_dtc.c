@@ -115,9 +115,11 @@ START_TEST(test_defaults_match_csv)
       ck_assert_uint_eq(d->priority, 3U);
       ck_assert(!d->warning_indicator);
     }
-    /* per-frame checks U1A1x..U1A4x count frames; everything else is
+    /* per-frame checks U1A1x..U1A4x and U1A51 (a rejected setpoint frame)
+     * count frames; everything else (the timeouts U1A0x, U1A50 too) is
      * reported already qualified */
-    const bool frame = (strncmp(code, "U1A", 3) == 0) && (code[3] != '0');
+    const bool frame = (strncmp(code, "U1A", 3) == 0) &&
+                       (((code[3] >= '1') && (code[3] <= '4')) || (strcmp(code, "U1A51") == 0));
     ck_assert_ptr_eq(d->deb, frame ? &canfdi_dtc_deb_frame : &canfdi_dtc_deb_direct);
     ck_assert_uint_eq(d->confirm_cycles, 1U);
     ck_assert_uint_eq(d->heal_cycles, 3U);
@@ -726,14 +728,14 @@ START_TEST(test_queries_by_mask)
   ck_assert_int_eq(canfdi_dtc_next_by_mask(&mem, 0xFFU, &cur, NULL, &s), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_dtc_next_by_mask(NULL, 0xFFU, &cur, &d, &s), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_dtc_find(&mem, 0x999999U), -CANFDI_EINVAL);
-  ck_assert_int_eq(canfdi_dtc_find(&mem, CANFDI_DTC_U1A41), (int32_t)CANFDI_DTC_COUNT - 1);
+  ck_assert_int_eq(canfdi_dtc_find(&mem, CANFDI_DTC_U1A51), (int32_t)CANFDI_DTC_COUNT - 1);
   ck_assert_int_eq(canfdi_dtc_status(&mem, (uint8_t)CANFDI_DTC_COUNT), -CANFDI_EINVAL);
   ck_assert_uint_eq(canfdi_dtc_count_by_mask(NULL, 0xFFU), 0U);
   ck_assert_int_eq(canfdi_dtc_clear(&mem, 0x999999U), -CANFDI_EINVAL);
   /* clear by group: only the comm codes go back to 0x50 */
   do_fail(&mem, (uint8_t)canfdi_dtc_find(&mem, CANFDI_DTC_U1A00));
   const int32_t n_com = canfdi_dtc_clear_group(&mem, CANFDI_COMPONENT_COMM);
-  ck_assert_int_eq(n_com, 10);
+  ck_assert_int_eq(n_com, 12); /* U1A00..U1A41 and the setpoints' U1A50, U1A51 */
   ck_assert_uint_eq(st(&mem, (uint8_t)canfdi_dtc_find(&mem, CANFDI_DTC_U1A00)), 0x50U);
   ck_assert_uint_eq(st(&mem, 0U), 0xAFU);
   ck_assert_int_eq(canfdi_dtc_clear_group(&mem, 77U), 0);

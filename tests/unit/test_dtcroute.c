@@ -132,7 +132,7 @@ START_TEST(test_p2135_persistence)
 END_TEST
 
 /* U-code monitors: PREFAILED reports debounce up to testFailed; monitors
- * without a code (setpoints) are not routed. */
+ * of the setpoints report to U1A50 / U1A51. */
 START_TEST(test_com_monitors)
 {
   canfdi_dtcroute_in_t in = in_of(0U, false, false);
@@ -149,8 +149,54 @@ START_TEST(test_com_monitors)
   }
   ck_assert_uint_gt(qualified, 1U); /* debounced, not immediate */
   ck_assert_uint_eq(status_of(CANFDI_DTC_U1A00) & CANFDI_DTC_ST_TF, 0U);
-  ck_assert_uint_eq(r.com_dtc[CANFDI_RX_MON_SP_DCM_TIMEOUT], CANFDI_DTC_NONE);
   ck_assert_uint_ne(r.com_dtc[CANFDI_RX_MON_THR_LENGTH], CANFDI_DTC_NONE);
+  /* the setpoints' monitors: both timeouts to U1A50, the rest to U1A51 */
+  for (k = CANFDI_RX_MON_SP_DCM_TIMEOUT; k < CANFDI_RX_MON_COUNT; k++) {
+    const bool timeout = (k == CANFDI_RX_MON_SP_DCM_TIMEOUT) || (k == CANFDI_RX_MON_SP_THR_TIMEOUT);
+    ck_assert_int_eq(r.com_dtc[k], canfdi_dtc_find(&dtc, timeout ? CANFDI_DTC_U1A50 : CANFDI_DTC_U1A51));
+  }
+}
+END_TEST
+
+/* Monitors that share a code (the setpoints') give its debouncer one
+ * report per step, a failure dominating: a bad SetpointThr CRC every step
+ * while the other setpoint monitors pass qualifies U1A51 after 3 steps
+ * (the frame class: +2 per PREFAILED, threshold 6), exactly as the CRC
+ * monitor alone would; reported one by one, the passes (-1 each) would
+ * cancel it and it would never qualify. A timeout of one setpoint while
+ * the other's passes is U1A50 at once (direct class). */
+START_TEST(test_shared_com_code)
+{
+  canfdi_dtcroute_in_t in = in_of(0U, false, false);
+  uint32_t k;
+  uint32_t qualified = 0U;
+  setup();
+  com.prefailed = UINT32_C(1) << CANFDI_RX_MON_SP_THR_CRC;
+  com.prepassed = (UINT32_C(1) << CANFDI_RX_MON_SP_DCM_CRC) | (UINT32_C(1) << CANFDI_RX_MON_SP_DCM_COUNTER) |
+                  (UINT32_C(1) << CANFDI_RX_MON_SP_DCM_LENGTH) | (UINT32_C(1) << CANFDI_RX_MON_SP_DCM_RANGE) |
+                  (UINT32_C(1) << CANFDI_RX_MON_SP_THR_LENGTH) | (UINT32_C(1) << CANFDI_RX_MON_SP_DCM_TIMEOUT) |
+                  (UINT32_C(1) << CANFDI_RX_MON_SP_THR_TIMEOUT);
+  for (k = 1U; (k <= 20U) && (qualified == 0U); k++) {
+    ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), 0);
+    if ((status_of(CANFDI_DTC_U1A51) & CANFDI_DTC_ST_TF) != 0U) {
+      qualified = k;
+    }
+  }
+  ck_assert_uint_eq(qualified, 3U);
+  ck_assert_uint_eq(status_of(CANFDI_DTC_U1A50) & CANFDI_DTC_ST_TF, 0U);
+  /* the frames come right again: passes heal it, one report per step */
+  com.prefailed = 0U;
+  com.prepassed |= UINT32_C(1) << CANFDI_RX_MON_SP_THR_CRC;
+  for (k = 0U; k < 12U; k++) {
+    ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), 0);
+  }
+  ck_assert_uint_eq(status_of(CANFDI_DTC_U1A51) & CANFDI_DTC_ST_TF, 0U);
+  /* one setpoint frame lost, the other one arriving */
+  com.prefailed = UINT32_C(1) << CANFDI_RX_MON_SP_THR_TIMEOUT;
+  com.prepassed = UINT32_C(1) << CANFDI_RX_MON_SP_DCM_TIMEOUT;
+  ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), 0);
+  ck_assert_uint_ne(status_of(CANFDI_DTC_U1A50) & CANFDI_DTC_ST_TF, 0U);
+  ck_assert_uint_eq(status_of(CANFDI_DTC_U1A00) & CANFDI_DTC_ST_TF, 0U);
 }
 END_TEST
 
@@ -224,6 +270,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_manager_findings);
   tcase_add_test(tc, test_p2135_persistence);
   tcase_add_test(tc, test_com_monitors);
+  tcase_add_test(tc, test_shared_com_code);
   tcase_add_test(tc, test_manager_faults);
   suite_add_tcase(s, tc);
   tc = tcase_create("errors");

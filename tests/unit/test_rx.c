@@ -102,6 +102,10 @@ static double input_phys(unsigned i, int64_t raw)
  * arithmetic; results outside int32_t saturate. Every signal of up to 16
  * bits (all that the ECU receives) must be within 1 LSB; the 24-bit ones
  * (DtcCode, exact at scale 1; PstSimTime) only within the bound.
+ * canfdi_rx_raw_to_q16 takes |scale| <= 1 by contract (it clamps): the
+ * signals with a coarser step, EcuStatus's times in 2 us units, are ones
+ * the ECU only sends (canfdi_tx converts them in integers) and are left
+ * out; the test checks that they are the ECU's own (ECU_*) frames.
  */
 START_TEST(conv_every_signal_whole_raw_range)
 {
@@ -111,6 +115,11 @@ START_TEST(conv_every_signal_whole_raw_range)
   for (size_t k = 0U; k < N_SIGS; k++) {
     const sig_t *s = &all_sigs[k];
     if (s->type_hi > INT32_MAX) {
+      continue;
+    }
+    if (s->sn > s->sd) {
+      CHECK(strncmp(s->name, "ECU_", 4U) == 0, "%s: scale %lld/%lld > 1 in a frame the ECU receives",
+            s->name, (long long)s->sn, (long long)s->sd);
       continue;
     }
     for (int64_t raw = s->type_lo; raw <= s->type_hi; raw++) {
@@ -198,6 +207,8 @@ END_TEST
 static canfdi_rx_t rx;
 static canfdi_e2e_tx_t tx_dcm;
 static canfdi_e2e_tx_t tx_thr;
+static canfdi_e2e_tx_t tx_sp_dcm;
+static canfdi_e2e_tx_t tx_sp_thr;
 static uint32_t now;
 
 /* Nominal raw values: 24 V, 3 A, 200 rad/s, 48 V; 1 V, 4 V, 1 A, 12 V. */
@@ -230,16 +241,20 @@ static void make_thr(uint8_t *d, const uint16_t *raw)
 static void make_sp_dcm(uint8_t *d, int16_t raw)
 {
   struct canfdi_sim_msg_setpoint_dcm_t m;
+  memset(&m, 0, sizeof m);
   m.sp_dcm_speed = raw;
   m.sp_dcm_load = 1200; /* 1.2 N m, plausible */
   ck_assert_int_eq(canfdi_sim_msg_setpoint_dcm_pack(d, &m, 8U), 8);
+  ck_assert_int_eq(canfdi_e2e_protect(&tx_sp_dcm, d, 8U), CANFDI_OK);
 }
 
 static void make_sp_thr(uint8_t *d, uint16_t raw)
 {
   struct canfdi_sim_msg_setpoint_thr_t m;
+  memset(&m, 0, sizeof m);
   m.sp_thr_angle = raw;
   ck_assert_int_eq(canfdi_sim_msg_setpoint_thr_pack(d, &m, 8U), 8);
+  ck_assert_int_eq(canfdi_e2e_protect(&tx_sp_thr, d, 8U), CANFDI_OK);
 }
 
 static void setup_cfg(const canfdi_rx_cfg_t *cfg)
@@ -252,6 +267,8 @@ static void setup_cfg(const canfdi_rx_cfg_t *cfg)
   now = 1000000U;
   canfdi_e2e_tx_init(&tx_dcm, CANFDI_MSG_DCM_SENSOR_FRAME_ID);
   canfdi_e2e_tx_init(&tx_thr, CANFDI_MSG_THR_SENSOR_FRAME_ID);
+  canfdi_e2e_tx_init(&tx_sp_dcm, CANFDI_MSG_SETPOINT_DCM_FRAME_ID);
+  canfdi_e2e_tx_init(&tx_sp_thr, CANFDI_MSG_SETPOINT_THR_FRAME_ID);
   ck_assert_int_eq(canfdi_rx_init(&rx, cfg, now), CANFDI_OK);
 }
 
@@ -494,7 +511,154 @@ START_TEST(setpoint_timeout_and_range)
   ck_assert(failed(CANFDI_RX_MON_SP_THR_LENGTH));
   ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_DCM_SPEED].quality, CANFDI_RX_VALID); /* recover 1 */
   assert_value(CANFDI_RX_IN_SP_DCM_SPEED, -20000);
-  ck_assert_uint_eq(canfdi_rx_monitor_dtc(CANFDI_RX_MON_SP_DCM_RANGE), 0U);
+  ck_assert_uint_eq(canfdi_rx_monitor_dtc(CANFDI_RX_MON_SP_DCM_RANGE), CANFDI_DTC_U1A51);
+  ck_assert_uint_eq(canfdi_rx_monitor_dtc(CANFDI_RX_MON_SP_THR_TIMEOUT), CANFDI_DTC_U1A50);
+}
+END_TEST
+
+/* Setpoints at their 10 ms cycle, each frame checked for (what is left
+ * after 30 healthy cycles): */
+static void sp_healthy(unsigned cycles)
+{
+  for (unsigned k = 0U; k < cycles; k++) {
+    cycle(true, true, true, nominal_raw);
+  }
+  while ((now / STEP_US) % 10U != 0U) {
+    cycle(true, true, true, nominal_raw);
+  }
+}
+
+/* One SetpointThr frame (raw angle) at the next 10 ms tick, sensors every
+ * ms; returns canfdi_rx_frame's result. The DC motor setpoint keeps coming
+ * healthy. */
+static int sp_thr_tick(const uint8_t *d)
+{
+  uint8_t dd[8];
+  int res;
+  for (unsigned k = 0U; k < 9U; k++) {
+    cycle(true, true, false, nominal_raw);
+  }
+  now += STEP_US;
+  make_dcm(dd, nominal_raw);
+  (void)canfdi_rx_frame(&rx, CANFDI_MSG_DCM_SENSOR_FRAME_ID, dd, 8U, now);
+  make_thr(dd, nominal_raw + 4);
+  (void)canfdi_rx_frame(&rx, CANFDI_MSG_THR_SENSOR_FRAME_ID, dd, 8U, now);
+  make_sp_dcm(dd, 5000);
+  ck_assert_int_eq(canfdi_rx_frame(&rx, CANFDI_MSG_SETPOINT_DCM_FRAME_ID, dd, 8U, now), CANFDI_RX_ACCEPTED);
+  res = canfdi_rx_frame(&rx, CANFDI_MSG_SETPOINT_THR_FRAME_ID, d, 8U, now);
+  ck_assert_int_eq(canfdi_rx_step(&rx, now), CANFDI_OK);
+  return res;
+}
+
+/* The setpoints' E2E protection: a wrong CRC (a bit flipped in the angle),
+ * a repeated counter and a counter jump beyond max_delta 2 each reject the
+ * frame (counted; U1A51's monitors pre-fail; the DC motor setpoint is
+ * untouched); the angle held is the last accepted one, SUBSTITUTED while
+ * younger than 50 ms, then INVALID (the application's safe reaction);
+ * one lost frame (jump 2) is still usable; the next good frame is VALID
+ * again (recover 1). */
+START_TEST(setpoint_e2e_rejects_and_holds)
+{
+  uint8_t d[8];
+  uint32_t crc0;
+  uint32_t ctr0;
+  setup_cfg(NULL);
+  sp_healthy(30U);
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_VALID);
+  assert_value(CANFDI_RX_IN_SP_THR_ANGLE, 15000);
+  crc0 = rx.diag.crc_err[CANFDI_RX_F_SP_THR];
+  ctr0 = rx.diag.counter_err[CANFDI_RX_F_SP_THR];
+  /* 1. wrong CRC: 60 deg with a bit flipped after the CRC was computed */
+  make_sp_thr(d, 30000U);
+  d[3] ^= 0x01U;
+  ck_assert_int_eq(sp_thr_tick(d), CANFDI_RX_BAD_CRC);
+  ck_assert(failed(CANFDI_RX_MON_SP_THR_CRC));
+  ck_assert(passed(CANFDI_RX_MON_SP_DCM_CRC));
+  ck_assert(passed(CANFDI_RX_MON_SP_THR_TIMEOUT)); /* it did arrive */
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_SUBSTITUTED);
+  assert_value(CANFDI_RX_IN_SP_THR_ANGLE, 15000); /* held, never 60 deg */
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_DCM_SPEED].quality, CANFDI_RX_VALID);
+  ck_assert_uint_eq(rx.diag.crc_err[CANFDI_RX_F_SP_THR], crc0 + 1U);
+  /* the next good frame: the sequence restarts after a CRC error */
+  make_sp_thr(d, 15500U);
+  ck_assert_int_eq(sp_thr_tick(d), CANFDI_RX_ACCEPTED);
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_VALID);
+  assert_value(CANFDI_RX_IN_SP_THR_ANGLE, 15500);
+  /* 2. the same frame again: REPEATED */
+  ck_assert_int_eq(sp_thr_tick(d), CANFDI_RX_BAD_COUNTER);
+  ck_assert(failed(CANFDI_RX_MON_SP_THR_COUNTER));
+  ck_assert(passed(CANFDI_RX_MON_SP_THR_CRC));
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_SUBSTITUTED);
+  ck_assert_uint_eq(rx.diag.counter_err[CANFDI_RX_F_SP_THR], ctr0 + 1U);
+  /* 3. one frame lost (counter +2): usable */
+  tx_sp_thr.counter = (uint8_t)((tx_sp_thr.counter + 1U) & 15U);
+  make_sp_thr(d, 16000U);
+  ck_assert_int_eq(sp_thr_tick(d), CANFDI_RX_ACCEPTED);
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_VALID);
+  assert_value(CANFDI_RX_IN_SP_THR_ANGLE, 16000);
+  /* 4. a jump of 3 (two lost) and more: rejected, then INVALID after 50 ms
+   * of nothing accepted, the held value until then */
+  for (unsigned k = 0U; k < 7U; k++) {
+    tx_sp_thr.counter = (uint8_t)((tx_sp_thr.counter + 2U + (k % 2U) * 5U) & 15U);
+    make_sp_thr(d, 45000U); /* 90 deg: wide open */
+    ck_assert_int_eq(sp_thr_tick(d), CANFDI_RX_BAD_COUNTER);
+    ck_assert(failed(CANFDI_RX_MON_SP_THR_COUNTER));
+    assert_value(CANFDI_RX_IN_SP_THR_ANGLE, 16000);
+    /* accepted at tick 0, rejected at 10..40 ms: held; 50 ms on: INVALID */
+    ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality,
+                      (k < 4U) ? CANFDI_RX_SUBSTITUTED : CANFDI_RX_INVALID);
+    ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_DCM_SPEED].quality, CANFDI_RX_VALID);
+  }
+  ck_assert_uint_eq(rx.diag.timeouts[CANFDI_RX_F_SP_THR], 0U); /* frames came: no timeout */
+  ck_assert_uint_eq(rx.diag.counter_err[CANFDI_RX_F_SP_THR], ctr0 + 8U);
+  /* 5. in sequence again: VALID at once */
+  make_sp_thr(d, 17000U);
+  ck_assert_int_eq(sp_thr_tick(d), CANFDI_RX_ACCEPTED);
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_VALID);
+  assert_value(CANFDI_RX_IN_SP_THR_ANGLE, 17000);
+  ck_assert_uint_eq(rx.diag.crc_err[CANFDI_RX_F_SP_DCM] + rx.diag.counter_err[CANFDI_RX_F_SP_DCM], 0U);
+}
+END_TEST
+
+/* A second sender on SetpointThr's identifier with a right CRC and a
+ * counter sequence of its own, interleaved with the vehicle's: every frame
+ * after the first is out of sequence (the check resynchronises to each),
+ * so neither sequence is taken and the angle goes INVALID after 50 ms. A
+ * forged frame carries 90 deg; it is never the value. */
+START_TEST(setpoint_second_sender_shows_as_counter_errors)
+{
+  uint8_t d[8];
+  canfdi_e2e_tx_t forger;
+  uint32_t ctr0;
+  unsigned accepted = 0U;
+  setup_cfg(NULL);
+  sp_healthy(30U);
+  canfdi_e2e_tx_init(&forger, CANFDI_MSG_SETPOINT_THR_FRAME_ID);
+  forger.counter = (uint8_t)((tx_sp_thr.counter + 8U) & 15U);
+  ctr0 = rx.diag.counter_err[CANFDI_RX_F_SP_THR];
+  for (unsigned k = 0U; k < 20U; k++) {
+    int res;
+    if ((k % 2U) == 0U) {
+      make_sp_thr(d, 15000U);
+    } else {
+      struct canfdi_sim_msg_setpoint_thr_t m;
+      memset(&m, 0, sizeof m);
+      m.sp_thr_angle = 45000U;
+      ck_assert_int_eq(canfdi_sim_msg_setpoint_thr_pack(d, &m, 8U), 8);
+      ck_assert_int_eq(canfdi_e2e_protect(&forger, d, 8U), CANFDI_OK);
+    }
+    res = sp_thr_tick(d);
+    accepted += (res == CANFDI_RX_ACCEPTED) ? 1U : 0U;
+    ck_assert_int_ne(res, CANFDI_RX_BAD_CRC); /* both CRCs are right */
+    ck_assert_int_ne(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].value_q16,
+                     canfdi_rx_raw_to_q16(45000, CANFDI_SIG_SETPOINT_THR_SP_THR_ANGLE_RAD_SCALE_Q32,
+                                          CANFDI_SIG_SETPOINT_THR_SP_THR_ANGLE_RAD_OFFSET_Q32));
+    if (k >= 5U) {
+      ck_assert_uint_eq(rx.in[CANFDI_RX_IN_SP_THR_ANGLE].quality, CANFDI_RX_INVALID);
+    }
+  }
+  ck_assert_uint_eq(accepted, 1U); /* the vehicle's first, still in its sequence */
+  ck_assert_uint_eq(rx.diag.counter_err[CANFDI_RX_F_SP_THR], ctr0 + 19U);
 }
 END_TEST
 
@@ -786,7 +950,13 @@ START_TEST(monitor_tables_follow_the_catalogue)
     ck_assert_uint_eq(canfdi_rx_monitor_dtc(m), dtc[m]);
     ck_assert_uint_eq(canfdi_rx_monitor_fault_id(m), fid[m]);
   }
-  for (unsigned m = 10U; m < 40U; m++) {
+  /* the setpoints': no catalogue fault, U1A50 (timeouts) and U1A51 */
+  for (unsigned m = 10U; m < CANFDI_RX_MON_COUNT; m++) {
+    const bool timeout = (m == CANFDI_RX_MON_SP_DCM_TIMEOUT) || (m == CANFDI_RX_MON_SP_THR_TIMEOUT);
+    ck_assert_uint_eq(canfdi_rx_monitor_dtc(m), timeout ? CANFDI_DTC_U1A50 : CANFDI_DTC_U1A51);
+    ck_assert_uint_eq(canfdi_rx_monitor_fault_id(m), 0U);
+  }
+  for (unsigned m = CANFDI_RX_MON_COUNT; m < 40U; m++) {
     ck_assert_uint_eq(canfdi_rx_monitor_dtc(m), 0U);
     ck_assert_uint_eq(canfdi_rx_monitor_fault_id(m), 0U);
   }
@@ -884,10 +1054,9 @@ START_TEST(random_flood_never_yields_unflagged_invalid_values)
   uint32_t n_valid = 0U;
   uint32_t n_sub = 0U;
   uint32_t n_inv = 0U;
-  uint8_t last_dcm[8];
-  uint8_t last_thr[8];
-  memset(last_dcm, 0, sizeof last_dcm);
-  memset(last_thr, 0, sizeof last_thr);
+  static const uint32_t sup_id[4] = {0x10U, 0x11U, 0x100U, 0x101U};
+  uint8_t last[4][8];
+  memset(last, 0, sizeof last);
   canfdi_rx_default_cfg(&cfg);
   for (unsigned i = 0U; i < CANFDI_RX_IN_COUNT; i++) {
     cfg.default_q16[i] = (int32_t)(i * 1000U) - 3000;
@@ -917,28 +1086,36 @@ START_TEST(random_flood_never_yields_unflagged_invalid_values)
       if (kind < 6U) {
         id = 0x10U;
         make_dcm(d, raw);
-        memcpy(last_dcm, d, 8U);
+        memcpy(last[0], d, 8U);
       } else if (kind < 12U) {
         id = 0x11U;
         make_thr(d, raw);
-        memcpy(last_thr, d, 8U);
+        memcpy(last[1], d, 8U);
       } else if (kind == 12U) {
         id = 0x100U;
         make_sp_dcm(d, (int16_t)(rnd() & 0xFFFFU));
+        memcpy(last[2], d, 8U);
       } else if (kind == 13U) {
         id = 0x101U;
         make_sp_thr(d, (uint16_t)(rnd() % 50000U));
+        memcpy(last[3], d, 8U);
       } else if (kind == 14U) { /* corrupted well-formed frame */
-        id = (rnd() & 1U) ? 0x10U : 0x11U;
-        if (id == 0x10U) {
+        const unsigned f = rnd() % 4U;
+        id = sup_id[f];
+        if (f == 0U) {
           make_dcm(d, raw);
-        } else {
+        } else if (f == 1U) {
           make_thr(d, raw);
+        } else if (f == 2U) {
+          make_sp_dcm(d, (int16_t)(rnd() & 0xFFFFU));
+        } else {
+          make_sp_thr(d, (uint16_t)(rnd() % 50000U));
         }
         d[rnd() % 8U] ^= (uint8_t)(1U << (rnd() % 8U));
       } else if (kind == 15U) { /* repeat: counter error */
-        id = (rnd() & 1U) ? 0x10U : 0x11U;
-        memcpy(d, (id == 0x10U) ? last_dcm : last_thr, 8U);
+        const unsigned f = rnd() % 4U;
+        id = sup_id[f];
+        memcpy(d, last[f], 8U);
       } else { /* random id and length, random bytes */
         const uint32_t pick = rnd() % 8U;
         id = (pick < 4U) ? (uint32_t[]){0x10U, 0x11U, 0x100U, 0x101U}[pick] : (rnd() & 0x7FFU);
@@ -958,7 +1135,7 @@ START_TEST(random_flood_never_yields_unflagged_invalid_values)
           CHECK((res) == (CANFDI_RX_BAD_LENGTH), "res == CANFDI_RX_BAD_LENGTH");
           continue;
         }
-        if ((id < 0x100U) && (canfdi_e2e_frame_crc((uint16_t)id, d, 8U) != d[0])) {
+        if (canfdi_e2e_frame_crc((uint16_t)id, d, 8U) != d[0]) { /* every supervised frame is E2E */
           CHECK((res) == (CANFDI_RX_BAD_CRC), "res == CANFDI_RX_BAD_CRC");
           continue;
         }
@@ -1270,6 +1447,8 @@ static Suite *make_suite(void)
   tcase_add_test(tc, first_timeout_window);
   tcase_add_loop_test(tc, timeout_exactly_after_n_missed_cycles, 0, 6);
   tcase_add_test(tc, setpoint_timeout_and_range);
+  tcase_add_test(tc, setpoint_e2e_rejects_and_holds);
+  tcase_add_test(tc, setpoint_second_sender_shows_as_counter_errors);
   tcase_add_loop_test(tc, error_type_reports_its_u_code, 0, 8);
   tcase_add_test(tc, counter_repeat_jump_and_one_lost);
   tcase_add_test(tc, substitution_holds_last_valid_value);

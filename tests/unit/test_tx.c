@@ -540,6 +540,66 @@ START_TEST(schedule_follows_the_dbc_cycle_times)
 }
 END_TEST
 
+/* E2E over the schedule: every frame of the protected identifiers (the
+ * actuators, EcuStatus, EcuDiagnosis, EcuDtc — cyclic and on-change
+ * sharing one counter) passes an E2E receiver with max_delta 1 (INITIAL,
+ * then OK: no counter skipped or repeated, right CRC over its own data
+ * ID). The engineering
+ * frames are not protected: byte 0 is their payload. */
+START_TEST(ecu_frames_are_e2e_protected)
+{
+  static const uint32_t prot[5] = {0x020U, 0x021U, 0x300U, 0x301U, 0x310U};
+  canfdi_e2e_rx_t rx[5];
+  unsigned seen[5] = {0};
+  canfdi_tx_data_t d;
+  memset(&d, 0, sizeof d);
+  ck_assert_int_eq(canfdi_tx_init(&tx), CANFDI_OK);
+  for (unsigned i = 0U; i < 5U; i++) {
+    ck_assert_int_eq(canfdi_e2e_rx_init(&rx[i], (uint16_t)prot[i], 1U), CANFDI_OK);
+  }
+  d.status.active_dtc_count = 3U;
+  d.diagnosis.dcm_fault_id = 1U;
+  d.diagnosis.dcm_confidence_pct = 87U;
+  d.dtc.dtc = CANFDI_DTC_P1A10;
+  d.dtc.count = 1U;
+  for (unsigned k = 0U; k < 3000U; k++) {
+    canfdi_tx_frame_t out[CANFDI_TX_MAX_FRAMES_PER_STEP];
+    const canfdi_tx_dtc_t ev = {CANFDI_DTC_U1A51, (uint8_t)(k & 0xFFU), 1U, 0U, 1U};
+    int n;
+    if ((k % 7U) == 0U) {
+      (void)canfdi_tx_dtc_event(&tx, &ev);
+    }
+    d.status.deadline_misses = k;
+    n = canfdi_tx_step(&tx, &d, out);
+    for (int j = 0; j < n; j++) {
+      bool is_prot = false;
+      for (unsigned i = 0U; i < 5U; i++) {
+        if (out[j].id == prot[i]) {
+          const int st = canfdi_e2e_check(&rx[i], out[j].data, out[j].dlc);
+          CHECK(st == ((seen[i] == 0U) ? CANFDI_E2E_INITIAL : CANFDI_E2E_OK), "0x%x frame %u: E2E %d",
+                prot[i], seen[i], st);
+          seen[i]++;
+          is_prot = true;
+        }
+      }
+      if (!is_prot) {
+        CHECK((out[j].id == 0x200U) || (out[j].id == 0x201U) || (out[j].id == 0x302U) ||
+                  (out[j].id == 0x320U) || (out[j].id == 0x321U),
+              "unexpected id 0x%x", out[j].id);
+      }
+    }
+  }
+  ck_assert_uint_eq(seen[0], 3000U);
+  ck_assert_uint_eq(seen[2], 30U);
+  ck_assert_uint_eq(seen[3], 30U);
+  ck_assert_uint_eq(seen[4], 30U + tx.diag.dtc_events); /* cyclic + on change, one counter */
+  ck_assert_uint_gt(tx.diag.dtc_events, 400U);
+  for (unsigned i = 0U; i < 5U; i++) {
+    ck_assert_uint_eq(rx[i].diag.status[CANFDI_E2E_OK], seen[i] - 1U);
+  }
+}
+END_TEST
+
 /* On-change DTC frames: in order, one per step, reason "change"; a full
  * queue drops and counts. */
 START_TEST(dtc_events_queue_in_order)
@@ -579,8 +639,10 @@ END_TEST
 /* Integer frames                                                      */
 /* ------------------------------------------------------------------ */
 
-/* EcuDtc as README states it: 3-byte DTC big-endian in bytes 0..2 (P0122
- * -> 01 22 00), byte 3 exactly the UDS status byte. */
+/* EcuDtc as dbc/README.md states it: the E2E CRC in byte 0 and counter in
+ * the low nibble of byte 1, the reason, index and count in bits 12..23,
+ * the 3-byte DTC big-endian in bytes 3..5 (P0122 -> 01 22 00), byte 6
+ * exactly the UDS status byte, byte 7 the occurrence counter. */
 START_TEST(dtc_frame_layout_is_uds)
 {
   canfdi_tx_frame_t fr;
@@ -589,22 +651,30 @@ START_TEST(dtc_frame_layout_is_uds)
   ck_assert_int_eq(canfdi_tx_init(&tx), CANFDI_OK);
   ck_assert_int_eq(canfdi_tx_encode_dtc(&tx, &rec, true, &fr), CANFDI_OK);
   ck_assert_uint_eq(fr.id, 0x310U);
-  ck_assert_uint_eq(fr.data[0], 0x01U);
-  ck_assert_uint_eq(fr.data[1], 0x22U);
-  ck_assert_uint_eq(fr.data[2], 0x00U);
-  ck_assert_uint_eq(fr.data[3], 0xA5U);
-  ck_assert_uint_eq(fr.data[4], 7U);
-  ck_assert_uint_eq(fr.data[5], 2U);
-  ck_assert_uint_eq(fr.data[6], 3U);
+  ck_assert_uint_eq(fr.data[0], canfdi_e2e_frame_crc(0x310U, fr.data, 8U));
+  ck_assert_uint_eq(fr.data[1] & 0x0FU, 0U); /* the first frame's counter */
+  ck_assert_uint_eq(fr.data[3], 0x01U);
+  ck_assert_uint_eq(fr.data[4], 0x22U);
+  ck_assert_uint_eq(fr.data[5], 0x00U);
+  ck_assert_uint_eq(fr.data[6], 0xA5U);
+  ck_assert_uint_eq(fr.data[7], 7U);
+  ck_assert_int_eq(dbc_raw(&fr, "DtcIndex"), 2);
+  ck_assert_int_eq(dbc_raw(&fr, "DtcCount"), 3);
   ck_assert_int_eq(dbc_raw(&fr, "DtcTxReason"), 1);
   ck_assert_int_eq(dbc_raw(&fr, "DtcStsConfirmed"), 0);   /* bit 3 of 0xA5 */
   ck_assert_int_eq(dbc_raw(&fr, "DtcStsWarningIndicator"), 1);
   ck_assert_int_eq(dbc_raw(&fr, "DtcCode"), (int64_t)CANFDI_DTC_P0122);
   big.dtc = 0x12345678UL;
+  big.index = 40U; /* index and count saturate at their narrower fields */
+  big.count = 70U;
   ck_assert_int_eq(canfdi_tx_encode_dtc(&tx, &big, false, &fr), CANFDI_OK);
   ck_assert_int_eq(dbc_raw(&fr, "DtcCode"), 0xFFFFFF);
   ck_assert_int_eq(dbc_raw(&fr, "DtcTxReason"), 0);
-  ck_assert_uint_eq(tx.diag.saturations, 1U);
+  ck_assert_int_eq(dbc_raw(&fr, "DtcIndex"), 31);
+  ck_assert_int_eq(dbc_raw(&fr, "DtcCount"), 63);
+  ck_assert_int_eq(dbc_raw(&fr, "EcuDtcCounter"), 1);
+  ck_assert_uint_eq(fr.data[0], canfdi_e2e_frame_crc(0x310U, fr.data, 8U));
+  ck_assert_uint_eq(tx.diag.saturations, 3U);
 }
 END_TEST
 
@@ -616,17 +686,32 @@ START_TEST(status_and_diagnosis_saturate)
   ck_assert_int_eq(canfdi_tx_init(&tx), CANFDI_OK);
   for (unsigned k = 0U; k < 20U; k++) {
     ck_assert_int_eq(canfdi_tx_encode_status(&tx, &st, &fr), CANFDI_OK);
-    ck_assert_int_eq(dbc_raw(&fr, "StsAliveCounter"), (int64_t)(k % 16U));
+    /* the E2E counter is the alive counter */
+    ck_assert_int_eq(dbc_raw(&fr, "EcuStatusCounter"), (int64_t)(k % 16U));
+    ck_assert_int_eq(dbc_raw(&fr, "EcuStatusCrc"), canfdi_e2e_frame_crc(0x300U, fr.data, 8U));
   }
   ck_assert_int_eq(dbc_raw(&fr, "StsDegStateDcm"), 1);
   ck_assert_int_eq(dbc_raw(&fr, "StsDegStateThr"), 2);
   ck_assert_int_eq(dbc_raw(&fr, "StsActiveBridge"), 2);
   ck_assert_int_eq(dbc_raw(&fr, "StsThrLimpHome"), 1);
-  ck_assert_int_eq(dbc_raw(&fr, "StsActiveDtcCount"), 255);
+  ck_assert_int_eq(dbc_raw(&fr, "StsActiveDtcCount"), 63);
   ck_assert_int_eq(dbc_raw(&fr, "StsDeadlineMisses"), 65535);
-  ck_assert_int_eq(dbc_raw(&fr, "StsStepTimeMax"), 4095);
-  ck_assert_int_eq(dbc_raw(&fr, "StsCycleTimeMax"), 4095);
-  ck_assert_uint_eq(tx.diag.saturations, 3U * 20U);
+  ck_assert_int_eq(dbc_raw(&fr, "StsStepTimeMax"), 2047); /* 4094 us */
+  ck_assert_int_eq(dbc_raw(&fr, "StsCycleTimeMax"), 2047); /* 4095 us: 2048 units, saturated */
+  ck_assert_uint_eq(tx.diag.saturations, 4U * 20U);
+  /* the times in 2 us units, rounded up (a maximum is never under-reported) */
+  st.step_time_max_us = 1001U;
+  st.cycle_time_max_us = 1000U;
+  ck_assert_int_eq(canfdi_tx_encode_status(&tx, &st, &fr), CANFDI_OK);
+  ck_assert_int_eq(dbc_raw(&fr, "StsStepTimeMax"), 501);
+  ck_assert_int_eq(dbc_raw(&fr, "StsCycleTimeMax"), 500);
+  st.step_time_max_us = UINT32_MAX; /* no wrap on the way to the units */
+  st.cycle_time_max_us = 0U;
+  ck_assert_int_eq(canfdi_tx_encode_status(&tx, &st, &fr), CANFDI_OK);
+  ck_assert_int_eq(dbc_raw(&fr, "StsStepTimeMax"), 2047);
+  ck_assert_int_eq(dbc_raw(&fr, "StsCycleTimeMax"), 0);
+  st.step_time_max_us = 5000U;
+  st.cycle_time_max_us = 4095U;
   st.deg_state_dcm = 9U; /* enumerations saturate to their top value */
   st.active_bridge = 7U;
   ck_assert_int_eq(canfdi_tx_encode_status(&tx, &st, &fr), CANFDI_OK);
@@ -634,6 +719,8 @@ START_TEST(status_and_diagnosis_saturate)
   ck_assert_int_eq(dbc_raw(&fr, "StsActiveBridge"), 2);
   ck_assert_int_eq(canfdi_tx_encode_diagnosis(&tx, &dg, &fr), CANFDI_OK);
   ck_assert_uint_eq(fr.id, 0x301U);
+  ck_assert_int_eq(dbc_raw(&fr, "EcuDiagnosisCounter"), 0);
+  ck_assert_int_eq(dbc_raw(&fr, "EcuDiagnosisCrc"), canfdi_e2e_frame_crc(0x301U, fr.data, 8U));
   ck_assert_int_eq(dbc_raw(&fr, "DiagDcmFaultId"), 4);
   ck_assert_int_eq(dbc_raw(&fr, "DiagThrFaultId"), 21);
   ck_assert_int_eq(dbc_raw(&fr, "DiagComFaultId"), 30);
@@ -719,6 +806,7 @@ static Suite *make_suite(void)
   tc = tcase_create("schedule");
   tcase_add_test(tc, schedule_follows_the_dbc_cycle_times);
   tcase_add_test(tc, dtc_events_queue_in_order);
+  tcase_add_test(tc, ecu_frames_are_e2e_protected);
   suite_add_tcase(s, tc);
   return s;
 }

@@ -1,5 +1,7 @@
-"""E2E protection of the 1 ms control frames; the Python twin of
-firmware/comm/canfdi_e2e.{h,c} (same layout, same statuses).
+"""E2E protection of the frames dbc/canfdi.dbc marks CanfdiE2E =
+Crc8Counter4 (the 1 ms control frames, the setpoints, the ECU's status,
+diagnosis and DTC frames); the Python twin of firmware/comm/canfdi_e2e.{h,c}
+(same layout, same statuses).
 
 Layout: byte 0 CRC-8 SAE J1850 (poly 0x1D, init 0xFF, xor-out 0xFF) over the
 data ID (= CAN identifier, 2 bytes, low byte first) and bytes 1..7; the
@@ -12,6 +14,7 @@ rolling counter 0..15 in the low nibble of byte 1.
 from __future__ import annotations
 
 from enum import IntEnum
+from typing import Any
 
 FRAME_LEN = 8
 CRC_BYTE = 0
@@ -111,3 +114,32 @@ class E2EReceiver:
             self.lost = delta - 1
         self.last_counter, self.synced = counter, True
         return status
+
+
+def protected_ids(db: Any, sender: str | None = None) -> dict[int, str]:
+    """Frame id -> name of every frame the DBC protects (attribute CanfdiE2E
+    = Crc8Counter4), of one sending node if given (e.g. "ECU")."""
+    out = {}
+    for m in db.messages:
+        a = m.dbc.attributes.get("CanfdiE2E") if m.dbc is not None else None
+        value = None if a is None else a.value
+        if value in (1, "Crc8Counter4") and (sender is None or sender in m.senders):
+            out[m.frame_id] = m.name
+    return out
+
+
+def judge(rx: E2EReceiver, frame: bytes) -> tuple[Status, str]:
+    """rx.check(frame) and, for a frame that may not be used, why (one line)."""
+    last = rx.last_counter
+    st = rx.check(frame)
+    if st == Status.WRONG_LENGTH:
+        why = f"length {len(frame)}, {FRAME_LEN} expected"
+    elif st == Status.WRONG_CRC:
+        why = f"wrong CRC 0x{frame[CRC_BYTE]:02X} (0x{frame_crc(rx.data_id, frame):02X} expected)"
+    elif st == Status.REPEATED:
+        why = f"counter {counter_of(frame)} repeated"
+    elif st == Status.WRONG_SEQUENCE:
+        why = f"counter jump {last} -> {counter_of(frame)}"
+    else:
+        why = ""
+    return st, why

@@ -6,6 +6,13 @@ by hand — so a range the DBC does not allow is refused before anything is
 sent. Fault names come from the catalogue (dbc/faults.csv) and are checked
 against the modes the fault allows, as the scenario parser does.
 
+The setpoints are E2E protected like the vehicle's (CRC-8 over the data ID
+and bytes 1..7, the rolling counter given with --counter, default 0). A
+frame from this tool is a second sender on the vehicle's identifier: the
+ECU usually rejects it and the vehicle's next one as counter errors (two
+frames in SdgFramesRejected, no trouble code), while the simulated plant
+takes it as an override and sends it on in its own sequence 10 ms later.
+
 The builders (fault_frame, clear_frame, setpoint_frames) are public so tests
 and other tools can make the same frames without a bus.
 """
@@ -20,6 +27,7 @@ import can
 
 from .busargs import BusOpenError, add_bus_args, open_bus
 from .catalogue import MODES, Fault, fault_by_name, load_faults
+from .e2e import protect, protected_ids
 from .timeline import load_db
 
 EPILOG = """\
@@ -29,7 +37,7 @@ examples:
   canfdi-inject fault dcm_ra_up --mode incipient --magnitude 0.2 --ramp 4
   canfdi-inject fault com_dcm_timeout --mode intermittent --period 1 --duty 20 --delay 0.5
   canfdi-inject -i socketcan -c vcan0 clear all
-  canfdi-inject setpoint --speed 120 --load 1.2 --angle 30
+  canfdi-inject setpoint --speed 120 --load 1.2 --angle 30     # E2E protected, counter 0
 
 exit status: 0 sent, 1 the bus could not be opened or the send failed,
 2 bad usage (unknown fault, mode not allowed, value out of the DBC's range).
@@ -57,12 +65,19 @@ def lookup_fault(name: str) -> Fault:
     return f
 
 
-def _encode(name: str, signals: dict[str, float | int]) -> can.Message:
-    m = load_db().get_message_by_name(name)
+def _encode(name: str, signals: dict[str, float | int], counter: int = 0) -> can.Message:
+    """Encoded by cantools; an E2E protected frame gets its CRC and counter."""
+    db = load_db()
+    m = db.get_message_by_name(name)
+    e2e = m.frame_id in protected_ids(db)
+    if e2e:
+        signals = {**signals, f"{name}Crc": 0, f"{name}Counter": 0}
     try:
         data = m.encode(signals, scaling=True, strict=True)
     except Exception as e:  # noqa: BLE001 — cantools reports ranges with several exception types
         raise UsageError(f"{name}: {e}") from None
+    if e2e:
+        data = bytes(protect(m.frame_id, bytearray(data), counter))
     return can.Message(arbitration_id=m.frame_id, data=data, is_extended_id=False)
 
 
@@ -108,16 +123,21 @@ def clear_frame(name: str = "all") -> Frame:
     return Frame(_encode("SimFaultClear", {"ClrFaultId": fid}), "clear " + ("all faults" if fid == 0 else name))
 
 
-def setpoint_frames(speed: float | None = None, load: float | None = None, angle: float | None = None) -> list[Frame]:
-    """SetpointDcm (speed and load travel together) and/or SetpointThr."""
+def setpoint_frames(speed: float | None = None, load: float | None = None, angle: float | None = None,
+                    counter: int = 0) -> list[Frame]:
+    """SetpointDcm (speed and load travel together) and/or SetpointThr, E2E
+    protected with the rolling counter `counter` (0..15)."""
     out: list[Frame] = []
+    if not 0 <= counter <= 15:
+        raise UsageError(f"--counter {counter}: the E2E counter is 0..15")
     if (speed is None) != (load is None):
         raise UsageError("SetpointDcm carries speed and load together: give both --speed and --load")
     if speed is not None and load is not None:
-        out.append(Frame(_encode("SetpointDcm", {"SpDcmSpeed": speed, "SpDcmLoad": load}),
+        out.append(Frame(_encode("SetpointDcm", {"SpDcmSpeed": speed, "SpDcmLoad": load}, counter),
                          f"setpoint motor speed {speed:g} rad/s, load {load:g} N m"))
     if angle is not None:
-        out.append(Frame(_encode("SetpointThr", {"SpThrAngle": angle}), f"setpoint throttle angle {angle:g} deg"))
+        out.append(Frame(_encode("SetpointThr", {"SpThrAngle": angle}, counter),
+                         f"setpoint throttle angle {angle:g} deg"))
     if not out:
         raise UsageError("setpoint: give --speed and --load, and/or --angle")
     return out
@@ -162,6 +182,8 @@ def build_parser() -> argparse.ArgumentParser:
     ps.add_argument("--speed", type=float, metavar="RAD_S", help="motor speed setpoint [rad/s]")
     ps.add_argument("--load", type=float, metavar="NM", help="known load torque [N m] (with --speed)")
     ps.add_argument("--angle", type=float, metavar="DEG", help="throttle angle setpoint [deg]")
+    ps.add_argument("--counter", type=int, default=0, metavar="N",
+                    help="E2E rolling counter of the frames, 0..15 (default 0); the CRC is always right")
     return p
 
 
@@ -179,7 +201,7 @@ def main(argv: list[str] | None = None) -> int:
         elif a.cmd == "clear":
             frames = [clear_frame(a.name)]
         elif a.cmd == "setpoint":
-            frames = setpoint_frames(a.speed, a.load, a.angle)
+            frames = setpoint_frames(a.speed, a.load, a.angle, a.counter)
         else:
             p.print_usage(sys.stderr)
             raise UsageError("nothing to do: give fault, clear or setpoint (or --list)")

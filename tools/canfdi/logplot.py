@@ -73,7 +73,8 @@ examples:
   canfdi-sil -q -s my.scn -l my.log && canfdi-plot my.log -s my.scn
 
 A line of a .log that does not parse is skipped and counted (file:line of
-the first one on stderr); so is a frame that does not decode.
+the first one on stderr); so is a frame that does not decode, and an ECU
+frame that fails its E2E check (forged or corrupted: canfdi-watch).
 
 exit status:
   0  the PNG was written (warnings about skipped lines go to stderr)
@@ -183,6 +184,8 @@ def read_plot_data(path: Path, t_from: float | None = None, t_to: float | None =
         m = msgs.get(fid)
         if m is None or msg.is_error_frame or msg.is_remote_frame or msg.is_extended_id:
             continue
+        if tl.last_rejected:
+            continue     # an ECU frame that failed its E2E check: forged or corrupted, not plotted
         t = tl.now_us * 1e-6
         if t < lo:
             continue
@@ -460,6 +463,8 @@ def main(argv: list[str] | None = None) -> int:
     if tl is not None and tl.stats.undecodable:
         print(f"canfdi-plot: {tl.stats.undecodable} frame(s) did not decode (first: {tl.stats.first_undecodable})",
               file=sys.stderr)
+    if tl is not None and tl.stats.e2e_bad:
+        print(f"canfdi-plot: not plotted: {tl.e2e_summary()}", file=sys.stderr)
     if data.frames_plotted == 0:
         where = "" if a.t_from is None and a.t_to is None else " in the range asked"
         print(f"canfdi-plot: {a.log}: no canfdi frame to plot{where} ({r.frames} frames read)", file=sys.stderr)

@@ -2,9 +2,11 @@
 
 The firmware application itself (the C core build/bin/canfdi-replay-core,
 the same code as on the ECU) is stepped on the log's own time base and fed
-the recorded input frames through the same input supervision; where its
-models need the voltage the actuators held, it takes the recorded ECU's
-actuator commands. The result is a timeline (log time, trouble code,
+the recorded input frames (sensors and setpoints) through the same input
+supervision, E2E checks included; where its models need the voltage the
+actuators held, it takes the recorded ECU's actuator commands. What the
+recorded ECU reported comes from its EcuDtc frames that pass their E2E
+check (CRC, counter); a forged or corrupted one is counted, never taken. The result is a timeline (log time, trouble code,
 status, degradation, confidence, description), what could not be judged
 and why, the log's data quality, and optionally a JSON and an HTML report.
 
@@ -55,7 +57,9 @@ start: a log that begins at the recorded ECU's power-up (its first frames
 equal the replay's, counters and all) is judged from the first step and
 must reproduce the recorded ECU's codes frame for frame; any other log is
 judged after a settling time (--settle, default %(settle)s s) and without the
-throttle's tracking monitor, whose reference the recording does not carry.
+throttle's tracking monitor, whose reference the recording does not carry
+(nor while the recorded ECU's throttle command differs from the replay's:
+it followed other setpoints).
 
 exit status:
   0  no trouble code found
@@ -431,6 +435,9 @@ def _print_quality(report: Report, i: int, bitrate: int, out: IO[str]) -> None:
         bad = {k: v for k, v in rej.items() if v}
         if bad:
             parts.append(f"{name} " + ", ".join(f"{k} {v}" for k, v in bad.items()))
+    if dq.get("recorded_ecu_dtc_frames_failing_e2e"):
+        parts.append(f"{dq['recorded_ecu_dtc_frames_failing_e2e']} recorded EcuDtc frame(s) forged or corrupted "
+                     f"(E2E check failed; not taken as the recorded ECU's)")
     for key, label in (("error_frames", "error frames"), ("fd_frames", "CAN FD frames (not fed)"),
                        ("remote_frames", "remote frames"), ("extended_frames", "29-bit frames")):
         if dq[key]:

@@ -305,6 +305,8 @@ def write_html(report: Report, doc: dict[str, Any], path: Path) -> None:
                                                                for k, v in list(dq["unknown_ids"].items())[:30])
                                                      or "none")],
                  ["recorded commands with a bad CRC", f"{dq['recorded_commands_bad_crc']}"],
+                 ["recorded EcuDtc frames failing E2E (forged or corrupted, not taken as the ECU's)",
+                  f"{dq.get('recorded_ecu_dtc_frames_failing_e2e', 0)}"],
                  ["bus load", f"mean {dq['bus_load_pct']['mean']:.1f} %, max {dq['bus_load_pct']['max']:.1f} % "
                               f"({_esc(dq['bus_load_pct']['note'])})"]]
         if len(report.logs) > 1:

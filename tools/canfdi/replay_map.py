@@ -26,10 +26,13 @@ How it is judged. A frame of the supervisor is made each time the message
 of its first mapped signal (its trigger) arrives, from the latest value of
 every mapped signal, once each has been received; it carries the trigger's
 time stamp and channel. The other bus has no E2E protection: the frames
-made here get a valid counter and CRC, so the counter, CRC and length
-checks (U1A10/U1A11, U1A20/U1A21, U1A30/U1A31) are not applied and say so;
+made here get a valid counter and CRC (every frame dbc/canfdi.dbc
+protects, the setpoints too), so the counter, CRC and length checks
+(U1A10/U1A11, U1A20/U1A21, U1A30/U1A31; for mapped setpoints that part of
+U1A51, whose range check still applies) are not applied and say so;
 timeouts are judged at the mapped rate (the same number of missed frames)
-and ranges as always. The models need a sample every 1 ms: a frame mapped
+and ranges as always. Setpoints the map does not give leave the setpoint
+checks (U1A50, U1A51) not judged: they are not in the recording. The models need a sample every 1 ms: a frame mapped
 at another rate leaves its plant's models not judged, with the reason.
 Frames of the other bus are decoded with cantools; those of the
 supervisor are encoded with cantools from dbc/canfdi.dbc.
@@ -47,12 +50,14 @@ import cantools
 from cantools.database.can import Database
 
 from . import DBC_PATH
-from .e2e import protect
+from .e2e import protect, protected_ids
 from .replay_input import Problems, candump_line, messages
+from .timeline import load_db
 
 #: The supervisor's frames a map may fill, and which plant's models use them.
 TARGET_FRAMES = ("DcmSensor", "ThrSensor", "SetpointDcm", "SetpointThr", "DcmActuator", "ThrActuator")
-E2E_FRAMES = ("DcmSensor", "ThrSensor", "DcmActuator", "ThrActuator")
+#: The frames made here that carry E2E protection (the DBC's CanfdiE2E).
+E2E_FRAMES = tuple(sorted(n for n in protected_ids(load_db()).values() if n in TARGET_FRAMES))
 PLANT_OF = {"DcmSensor": "dcm", "ThrSensor": "thr", "DcmActuator": "dcm", "ThrActuator": "thr"}
 NOT_APPLIED = {
     "DcmSensor": {"U1A10": "counter", "U1A20": "CRC", "U1A30": "length"},

@@ -26,7 +26,9 @@ The JSON report (``Report.to_json``) has this schema (version
                   time_stamps_back, rebased [...], crc/counter/length/
                   implausible/timeouts per frame, error_frames [...],
                   fd_frames, remote_frames, extended_frames,
-                  other_channels, unknown_ids, bus_load_pct {mean, max},
+                  other_channels, unknown_ids, recorded_commands_bad_crc,
+                  recorded_ecu_dtc_frames_failing_e2e (forged or corrupted
+                  EcuDtc frames, not taken as the ECU's), bus_load_pct {mean, max},
                   missing_frames [...], read_errors [...]},
     exit_status
 """
@@ -49,6 +51,7 @@ DIAG_RULES_CSV = REPO_ROOT / "dbc" / "diag_rules.csv"
 MONITORS: dict[str, str] = {
     "com_dcm": "DcmSensor frame checks (timeout, counter, CRC, length, range)",
     "com_thr": "ThrSensor frame checks (timeout, counter, CRC, length, range)",
+    "com_sp": "SetpointDcm and SetpointThr frame checks (timeout, counter, CRC, length, range)",
     "tps_range": "TPS1/TPS2 range checks",
     "dcm_models": "DC-motor parity equations and parameter estimator",
     "dcm_cmd": "DC-motor power-stage check and U_A against the command",
@@ -58,12 +61,19 @@ MONITORS: dict[str, str] = {
 CODE_MONITORS: dict[str, tuple[str, ...]] = {
     **{c: ("com_dcm",) for c in ("U1A00", "U1A10", "U1A20", "U1A30", "U1A40")},
     **{c: ("com_thr",) for c in ("U1A01", "U1A11", "U1A21", "U1A31", "U1A41")},
+    **{c: ("com_sp",) for c in ("U1A50", "U1A51")},
     **{c: ("tps_range",) for c in ("P0122", "P0123", "P0222", "P0223")},
     **{c: ("dcm_models",) for c in ("P1A10", "P1A11", "P1A12", "P1A20", "P1A21")},
     **{c: ("dcm_cmd",) for c in ("P1A22", "P1A30", "P1A31")},
     **{c: ("thr_models",) for c in ("P0121", "P0221", "P2135", "P0638", "P1B10", "P2101", "P2100")},
     "P2119": ("thr_models", "thr_tracking"),
 }
+#: The input frames a communication monitor judges: where one of them is
+#: not in the recording at all, the monitor is not judged (its timeout
+#: would say nothing about the bus). The setpoints share their codes, so
+#: both must be there.
+MONITOR_FRAMES: dict[str, tuple[str, ...]] = {"com_dcm": ("DcmSensor",), "com_thr": ("ThrSensor",),
+                                              "com_sp": ("SetpointDcm", "SetpointThr")}
 STATUS_BITS = ("TF", "TFTOC", "PDTC", "CDTC", "TNCSLC", "TFSLC", "TNCTOC", "WIR")
 DCM_CHANNELS = ("r1", "r2", "r3", "r4", "R_A", "Psi", "J", "M_c", "J/Psi", "UAC")
 THR_CHANNELS = ("CORR", "ARM", "POS1", "POS2", "R", "K", "spring", "friction", "-", "-")
@@ -160,8 +170,7 @@ class LogState:
         return self.last_t + 0.001
 
     def tested_spans(self, monitor: str) -> list[tuple[float, float]]:
-        frame = {"com_dcm": "DcmSensor", "com_thr": "ThrSensor"}.get(monitor)
-        if frame and self.never_received(frame):
+        if any(self.never_received(f) for f in MONITOR_FRAMES.get(monitor, ())):
             return []
         ev = self.mon.get(monitor, [])
         out = []
@@ -178,8 +187,8 @@ class LogState:
 
     def untested_spans(self, monitor: str) -> list[Span]:
         first = float(self.eof.get("first_t", 0.0))
-        frame = {"com_dcm": "DcmSensor", "com_thr": "ThrSensor"}.get(monitor)
-        if frame and self.never_received(frame):
+        frame = next((f for f in MONITOR_FRAMES.get(monitor, ()) if self.never_received(f)), None)
+        if frame:
             return [Span(first, self.end_t, f"{frame} is not in the recording (its timeout says nothing "
                                             f"about the bus)")]
         ev = self.mon.get(monitor, [])
@@ -512,6 +521,7 @@ class Report:
                                    for k, v in eo.get("other_channels", {}).items()},
                 "unknown_ids": eo.get("unknown_ids", {}),
                 "recorded_commands_bad_crc": int(eo.get("cmd_bad_crc", 0)),
+                "recorded_ecu_dtc_frames_failing_e2e": int(eo.get("rec_e2e_bad", 0)),
                 "simstep_rejected": int(eo.get("simstep_bad", 0)),
                 "bus_load_pct": {"bitrate": bitrate, "mean": round(sum(loads) / len(loads), 2) if loads else 0.0,
                                  "max": round(max(loads), 2) if loads else 0.0,

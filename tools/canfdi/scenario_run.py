@@ -8,7 +8,10 @@ the scenario's expect lines exactly as canfdi-sil does (canfdi.expect), so a
 SIL and a HIL run of one scenario print the same PASS/FAIL lines.
 
 In lockstep the recording must be complete: SimStep indices 0..N-1 without a
-gap and both actuator frames for every step; anything lost is an error.
+gap and both actuator frames for every step; anything lost is an error. So
+is an ECU frame that fails its E2E check (a forged or corrupted status,
+diagnosis, trouble-code or actuator frame, canfdi.timeline): it is listed in
+the timeline as such, never decoded, and the run fails.
 """
 from __future__ import annotations
 
@@ -44,7 +47,8 @@ examples:
   canfdi-scenario --no-start --log run.log my.scn    # ECU and sim already running
 
 exit status: 0 every expectation met and the run was clean; 1 an expectation
-failed, a program failed, or frames were lost; 2 bad usage or invalid scenario,
+failed, a program failed, frames were lost, or an ECU frame was forged or
+corrupted (failed its E2E check); 2 bad usage or invalid scenario,
 or a scenario only the SIL rig can run (cycle, clear, power_cycle or expect
 freeze: ECU-side actions and reads that are not on the bus yet).
 """
@@ -170,6 +174,7 @@ def result_json(scn: Scenario, tl: Timeline, verdicts: list[Verdict], res: RunRe
                   for r in tl.dtcs.values() if r.first_reported_us >= 0 or r.first_pending_us >= 0},
         "errors": res.errors, "warnings": res.warnings,
         "frames": tl.stats.frames, "undecodable": tl.stats.undecodable, "steps": tl.stats.steps,
+        "e2e_failures": {f"0x{fid:03X}": per for fid, per in sorted(tl.stats.e2e_bad_by_id.items())},
         "simulated_s": tl.end_us * 1e-6, "wall_s": round(res.wall_s, 3),
     }
 
@@ -189,6 +194,8 @@ def evaluate_log(scn: Scenario, log: Path, res: RunResult, started: bool, lockst
         res.errors.append(f"{rstats.bad_lines} unreadable line(s) in {log} (first: {rstats.first_error})")
     if tl.stats.undecodable:
         res.warnings.append(f"{tl.stats.undecodable} frame(s) did not decode (first: {tl.stats.first_undecodable})")
+    if tl.stats.e2e_bad:
+        res.errors.append(tl.e2e_summary())
     check_complete(tl, scn, started, lockstep, res)
     verdicts = evaluate(scn, tl)
     if not quiet:

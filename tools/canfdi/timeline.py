@@ -29,6 +29,20 @@ the 1 ms sensor frames are counted, not decoded. A 20 s SIL log (~89 k
 frames) takes ~0.1 s here; reading the file costs more than the timeline.
 A frame that does not decode is counted in ``stats.undecodable`` and never
 stops the timeline.
+
+The ECU's E2E protected frames (dbc/canfdi.dbc, CanfdiE2E: DcmActuator,
+ThrActuator, EcuStatus, EcuDiagnosis, EcuDtc) are judged before anything is
+read from them, with the ECU's own check (canfdi.e2e, one receiver per
+identifier, one lost frame tolerated): a wrong length or CRC, a repeated
+counter or a counter jump makes the frame "forged or corrupted". It is
+counted (``stats.e2e_bad``), listed as an event of kind ``forged`` with its
+identifier and the reason (the first FORGED_LISTED per identifier), and
+never decoded: no diagnosis, status change, power-stage switch or trouble
+code comes from it. A second node sending the ECU's identifiers shows as
+counter errors (after each jump the check follows the frame just seen, so
+the next frame of the other sequence jumps again); so does, once per
+identifier, a restart of the ECU within one recording (its counters start
+at 0 again).
 """
 from __future__ import annotations
 
@@ -41,6 +55,7 @@ from cantools.database.can import Database
 
 from . import DBC_PATH
 from .catalogue import decode_dtc, dtc_by_code, load_faults
+from .e2e import E2EReceiver, Status, judge, protected_ids
 
 DEG_NAMES = ("normal", "degraded", "fail_safe", "fail_silent")
 BRIDGE_NAMES = ("none", "A", "B")
@@ -54,6 +69,15 @@ ID_INJECT, ID_CLEAR, ID_PLANT, ID_STEP = 0x600, 0x601, 0x610, 0x611
 ID_SP_DCM, ID_SP_THR = 0x100, 0x101
 DECODED = frozenset({ID_DCM_ACT, ID_THR_ACT, ID_RES_DCM, ID_RES_THR, ID_STATUS, ID_DIAG, ID_SELFDIAG, ID_DTC,
                      ID_INJECT, ID_CLEAR, ID_PLANT, ID_STEP, ID_SP_DCM, ID_SP_THR})
+
+#: Largest counter step of an ECU frame still taken (one lost frame), as
+#: the ECU's own receivers (canfdi_rx_default_cfg).
+E2E_MAX_DELTA = 2
+#: Forged or corrupted frames listed as events per identifier; the rest
+#: are counted.
+FORGED_LISTED = 10
+E2E_KIND = {Status.WRONG_CRC: "CRC", Status.WRONG_LENGTH: "length", Status.REPEATED: "counter",
+            Status.WRONG_SEQUENCE: "counter"}
 
 RESIDUALS = (("ResDcmR1", "dcm r1"), ("ResDcmR2", "dcm r2"), ("ResDcmR3", "dcm r3"), ("ResDcmR4", "dcm r4"),
              ("ResThrCorr", "thr corr"), ("ResThrTps1", "thr tps1"), ("ResThrTps2", "thr tps2"),
@@ -86,7 +110,7 @@ def fmt_t(t_us: int) -> str:
 class Event:
     """One line of the timeline."""
     t_us: int
-    kind: str          # dtc | degradation | bridge | limp_home | diagnosis | inject | plant | residuals
+    kind: str          # dtc | degradation | bridge | limp_home | diagnosis | inject | plant | residuals | forged
     text: str
     code: str = ""     # trouble code for kind == 'dtc'
 
@@ -137,6 +161,10 @@ class FrameStats:
     step_repeats: int = 0          # stale or duplicated indices
     first_gap: str = ""
     counts: dict[int, int] = field(default_factory=dict)   # frames per CAN ID
+    e2e_checked: int = 0           # the ECU's E2E protected frames judged
+    e2e_bad: int = 0               # ... that failed: forged or corrupted, not decoded
+    e2e_bad_by_id: dict[int, dict[str, int]] = field(default_factory=dict)  # id -> CRC/counter/length -> n
+    first_e2e_bad: str = ""
 
 
 class Timeline:
@@ -147,6 +175,10 @@ class Timeline:
         self.db = db if db is not None else load_db()
         self._msg = {m.frame_id: m for m in self.db.messages}
         self._ecu_ids = frozenset(m.frame_id for m in self.db.messages if "ECU" in m.senders)
+        self._e2e_names = protected_ids(self.db, "ECU")
+        self._e2e = {fid: E2EReceiver(fid, E2E_MAX_DELTA) for fid in self._e2e_names}
+        #: the last frame fed failed its E2E check and was not decoded
+        self.last_rejected = False
         self._ecu_k = -1    # lockstep: the step of the ECU's latest actuator frame
         self.descriptions = {d.code: d.description for d in dtc_by_code().values()}
         self.on_event = on_event
@@ -225,6 +257,7 @@ class Timeline:
         st = self.stats
         st.frames += 1
         st.counts[msg.arbitration_id] = st.counts.get(msg.arbitration_id, 0) + 1
+        self.last_rejected = False
         if msg.is_error_frame or msg.is_remote_frame:
             st.error_frames += msg.is_error_frame
             return
@@ -234,6 +267,13 @@ class Timeline:
             st.unknown_id += 1
             return
         data = bytes(msg.data)
+        rx = self._e2e.get(fid)
+        if rx is not None:
+            status, why = judge(rx, data)
+            st.e2e_checked += 1
+            if not status.usable:
+                self._forged(fid, status, why, data, self._advance(msg))
+                return
         if fid not in DECODED:
             self._advance(msg)
             return
@@ -257,6 +297,37 @@ class Timeline:
             self._pst = (pst + self._pst_wraps * PST_WRAP_US, float(msg.timestamp))
         t = self._advance(msg)
         self._handle(fid, sig, t)
+
+    def _forged(self, fid: int, status: Status, why: str, data: bytes, t: int) -> None:
+        """An ECU frame that failed its E2E check: counted, listed, not decoded."""
+        s = self.stats
+        self.last_rejected = True
+        per = s.e2e_bad_by_id.setdefault(fid, {})
+        kind = E2E_KIND.get(status, "other")
+        per[kind] = per.get(kind, 0) + 1
+        s.e2e_bad += 1
+        name = self._e2e_names[fid]
+        if not s.first_e2e_bad:
+            s.first_e2e_bad = f"0x{fid:03X} {name} [{len(data)}] {data.hex()} at {t * 1e-6:.3f} s: {why}"
+        n = sum(per.values())
+        if n <= FORGED_LISTED:
+            self._emit(t, "forged", f"0x{fid:03X} {name} forged or corrupted: {why} (not decoded)")
+            if n == FORGED_LISTED:
+                self._emit(t, "forged", f"0x{fid:03X} {name}: further forged or corrupted frames "
+                                        "are counted, not listed")
+
+    def e2e_summary(self) -> str:
+        """One line on the ECU frames that failed their E2E check ("" if none)."""
+        s = self.stats
+        if not s.e2e_bad:
+            return ""
+        parts = []
+        for fid in sorted(s.e2e_bad_by_id):
+            per = s.e2e_bad_by_id[fid]
+            kinds = ", ".join(f"{k} {n}" for k, n in sorted(per.items()))
+            parts.append(f"0x{fid:03X} {self._e2e_names[fid]} {sum(per.values())} ({kinds})")
+        return (f"{s.e2e_bad} ECU frame(s) forged or corrupted (E2E check failed, not decoded): "
+                + "; ".join(parts) + f"; first: {s.first_e2e_bad}")
 
     def set_origin(self, status: can.Message) -> None:
         """Realtime log known in advance: anchor time on its first SimPlantStatus.

@@ -150,6 +150,8 @@ DTCS = {
     0xDA3100: ('U1A31', 'Throttle sensor frame length (DLC) error (manufacturer code)'),
     0xDA4000: ('U1A40', 'DC motor sensor frame implausible signal value (manufacturer code)'),
     0xDA4100: ('U1A41', 'Throttle sensor frame implausible signal value (manufacturer code)'),
+    0xDA5000: ('U1A50', 'Lost communication with the vehicle controller: setpoint frame timeout (SetpointDcm or SetpointThr) (manufacturer code)'),
+    0xDA5100: ('U1A51', 'Invalid data from the vehicle controller: setpoint frame rejected (E2E CRC or rolling counter; length; value out of range) (manufacturer code)'),
 }
 
 

@@ -7,6 +7,12 @@ limp-home, isolated faults with confidence, injected faults, and with
 (see canfdi.timeline), so a lockstep run reads the same however slow the bus.
 
 --expect/--forbid turn it into a check a test script can call.
+
+Every E2E protected frame of the ECU (DcmActuator, ThrActuator, EcuStatus,
+EcuDiagnosis, EcuDtc) is checked like the ECU checks its inputs (CRC over
+the data ID and bytes 1..7, rolling counter): a frame that fails is printed
+as "forged or corrupted" with its identifier and the reason and is never
+decoded into a diagnosis, a status change or a trouble code.
 """
 from __future__ import annotations
 
@@ -39,11 +45,19 @@ count simulated time from the first frame watched. With only --expect the
 watch ends as soon as every expected code appeared; with --forbid it lasts
 the whole --within (else --duration, else the log or until interrupted).
 
+E2E: a frame on an ECU identifier with a wrong CRC or length, a repeated
+counter or a counter jump (a second node sending the ECU's identifiers
+shows as counter jumps) is listed as
+  0x301 EcuDiagnosis forged or corrupted: wrong CRC 0x12 (0x9C expected) (not decoded)
+and makes the watch fail. A restart of the ECU within the watch (counters
+from 0 again) shows as one counter jump per identifier.
+
 exit status:
   0  every --expect code appeared in time and no --forbid code appeared
      (or, without checks, the watch ended normally)
   1  an expected code did not appear in time, a forbidden one appeared,
-     the bus could not be opened, or the log held no readable frame
+     an ECU frame was forged or corrupted (failed its E2E check), the bus
+     could not be opened, or the log held no readable frame
   2  bad usage: unknown trouble code, unreadable log file
 """
 
@@ -213,6 +227,9 @@ def main(argv: list[str] | None = None) -> int:
         if bus is not None:
             bus.shutdown()
     s = tl.stats
+    if s.e2e_bad:
+        checks.results.append(f"FAIL  {tl.e2e_summary()}")
+        checks.failed = True
     if rstats.bad_lines:
         print(f"canfdi-watch: {rstats.bad_lines} unreadable line(s) skipped (first: {rstats.first_error})",
               file=sys.stderr)

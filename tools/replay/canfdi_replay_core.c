@@ -49,6 +49,19 @@
  * the recorded one is given to the application (canfdi_app_set_applied).
  * A command frame with a wrong CRC, or none for CMD_FRESH_STEPS steps,
  * makes the command unknown: the monitors that need it are not judged.
+ * The throttle's tracking monitor compares the valve with this
+ * supervisor's position reference: from a power-up log that is the one the
+ * recorded ECU drove it to, as long as their throttle commands agree. Once
+ * the recorded command differs (the replay took other inputs than the
+ * recorded ECU, e.g. setpoints the replay rejects), the valve followed
+ * another reference: the monitor is not judged until the commands have
+ * agreed again for THR_AGREE_STEPS steps.
+ * The recorded ECU's EcuDtc frames (what it reported, beside what the
+ * replay finds) are taken only when they pass the E2E check the ECU's own
+ * receivers make (CRC, counter with max_delta 2): a forged or corrupted one
+ * is counted (eof rec_e2e_bad), never reported as the ECU's code. The
+ * setpoints are fed like every input: the replayed supervision judges
+ * their E2E protection as on the ECU (U1A50/U1A51).
  *
  * Start: a log that begins at the recorded ECU's power-up (its first frames
  * equal this supervisor's, counters and all: --start auto checks the first
@@ -84,6 +97,7 @@
 
 #define STEP_US 1000
 #define CMD_FRESH_STEPS 10U          /* a command older than this is not known */
+#define THR_AGREE_STEPS 1000U        /* recorded = own throttle command this long: the reference is ours again */
 #define PU_MIN_FRAMES 20U            /* ECU frames compared before the start is called power-up */
 #define PU_MAX_STEPS 100U            /* ... within these steps, else mid-drive */
 #define LOOKAHEAD_FRAMES 512U        /* frames read before the clock is chosen */
@@ -209,9 +223,10 @@ static bool in_dbc(uint32_t id)
 }
 
 /* Monitors as the report names them: what each needs from the recording. */
-enum { MON_COM_DCM, MON_COM_THR, MON_TPS_RANGE, MON_DCM_MODELS, MON_DCM_CMD, MON_THR_MODELS, MON_THR_TRACK, N_MON };
-static const char *const mon_name[N_MON] = {"com_dcm",  "com_thr",    "tps_range",   "dcm_models",
-                                            "dcm_cmd", "thr_models", "thr_tracking"};
+enum { MON_COM_DCM, MON_COM_THR, MON_COM_SP, MON_TPS_RANGE, MON_DCM_MODELS, MON_DCM_CMD, MON_THR_MODELS,
+       MON_THR_TRACK, N_MON };
+static const char *const mon_name[N_MON] = {"com_dcm",    "com_thr",    "com_sp",      "tps_range",
+                                            "dcm_models", "dcm_cmd",    "thr_models", "thr_tracking"};
 
 enum {
   WHY_NONE,
@@ -225,6 +240,7 @@ enum {
   WHY_THR_INPUTS,
   WHY_THR_CMD,
   WHY_THR_REF,
+  WHY_THR_APART,
   WHY_MODELS_DCM,
   WHY_MODELS_THR,
   N_WHY
@@ -242,6 +258,7 @@ static const char *const why_text[N_WHY] = {
     "no valid ThrActuator command in the recording",
     "the recorded ECU's position reference is not in the recording (its excitation phase is "
     "known only from its power-up)",
+    "the recorded ECU drove the throttle otherwise than the replay (another position reference)",
     NULL, /* --no-models text */
     NULL};
 
@@ -306,6 +323,10 @@ typedef struct {
   bool dcm_sample_set, thr_sample_set;
   cmd_t dcm_own, thr_own;        /* the supervisor's own last command frames */
   uint64_t cmd_bad_crc;
+  uint32_t thr_apart_steps;      /* > 0: the recorded throttle command differed from own lately */
+  /* the recorded ECU's EcuDtc frames, judged as its receivers judge theirs */
+  canfdi_e2e_rx_t rec_dtc_e2e;
+  uint64_t rec_e2e_bad;
   /* start */
   int start_mode;               /* START_POWER_UP / START_MID_DRIVE once decided */
   bool start_decided;
@@ -493,7 +514,14 @@ static void apply_commands(bool *dcm_known_out, bool *thr_known_out)
   a.thr_known = true;
   a.dcm = rp.app.fb.mgr.dcm;
   a.thr = rp.app.fb.mgr.thr;
-  a.thr_ref_known = power_up;
+  if (cmd_known(t) && !cmd_same(t, &rp.thr_own)) {
+    rp.thr_apart_steps = THR_AGREE_STEPS; /* the valve follows the recorded ECU's reference */
+  } else if (rp.thr_apart_steps > 0U) {
+    rp.thr_apart_steps--;
+  } else {
+    /* agreeing */
+  }
+  a.thr_ref_known = power_up && (rp.thr_apart_steps == 0U);
   if (!a.thr_ref_known) {
     call = true;
   }
@@ -612,6 +640,10 @@ static void dtc_frame(bool recorded, const uint8_t *d, uint8_t len, int64_t t_us
 {
   struct canfdi_rp_msg_ecu_dtc_t m;
   uint8_t st;
+  if (recorded && !canfdi_e2e_status_is_usable(canfdi_e2e_check(&rp.rec_dtc_e2e, d, len))) {
+    rp.rec_e2e_bad++; /* forged or corrupted: not the recorded ECU's word */
+    return;
+  }
   if ((len != 8U) || (canfdi_rp_msg_ecu_dtc_unpack(&m, d, len) != 0) || (m.dtc_code == 0U)) {
     return;
   }
@@ -683,6 +715,7 @@ static void monitor_whys(bool dcm_cmd_known, bool thr_cmd_known, bool power_up, 
   const bool tps_in = canfdi_rx_usable(&a->rx, CANFDI_RX_IN_THR_TPS1) && canfdi_rx_usable(&a->rx, CANFDI_RX_IN_THR_TPS2);
   w[MON_COM_DCM] = gap ? WHY_GAP : WHY_NONE;
   w[MON_COM_THR] = gap ? WHY_GAP : WHY_NONE;
+  w[MON_COM_SP] = gap ? WHY_GAP : WHY_NONE;
   w[MON_TPS_RANGE] = gap ? WHY_GAP : (!thr_rx ? WHY_THR_FRAME : (!tps_in ? WHY_THR_INPUTS : WHY_NONE));
   w[MON_DCM_MODELS] = gap      ? WHY_GAP
                       : settle ? settle_why
@@ -698,7 +731,10 @@ static void monitor_whys(bool dcm_cmd_known, bool thr_cmd_known, bool power_up, 
                       : !thr_in ? WHY_THR_INPUTS
                       : !thr_cmd_known ? WHY_THR_CMD
                                        : WHY_NONE;
-  w[MON_THR_TRACK] = (w[MON_THR_MODELS] != WHY_NONE) ? w[MON_THR_MODELS] : (!power_up ? WHY_THR_REF : WHY_NONE);
+  w[MON_THR_TRACK] = (w[MON_THR_MODELS] != WHY_NONE) ? w[MON_THR_MODELS]
+                     : !power_up                    ? WHY_THR_REF
+                     : (rp.thr_apart_steps > 0U)    ? WHY_THR_APART
+                                                    : WHY_NONE;
 }
 
 static void emit_monitors(int64_t t_us, const uint8_t w[N_MON])
@@ -965,6 +1001,8 @@ static void run_step(uint32_t now_us)
     int32_t rc;
     rp.image_len = canfdi_app_power_down(&rp.app, rp.image, (uint32_t)sizeof rp.image);
     rc = canfdi_app_power_up(&rp.app, &rp.cal, now_us, rp.image, (rp.image_len > 0) ? (uint32_t)rp.image_len : 0U);
+    /* the recorded ECU restarted too: its E2E counters start again */
+    (void)canfdi_e2e_rx_init(&rp.rec_dtc_e2e, (uint16_t)CANFDI_RP_MSG_ECU_DTC_FRAME_ID, 2U);
     fprintf(ev, "{\"ev\":\"power_cycle\",\"file\":%d,\"image_bytes\":%d,\"rc\":%d,\"ecu_reset\":true,\"t\":",
             rp.file_index, (int)rp.image_len, (int)rc);
     ev_time(rp.step_log_us);
@@ -1465,6 +1503,9 @@ static void reset_file_state(int index, const char *name)
   rp.dcm_sample_set = false;
   rp.thr_sample_set = false;
   rp.cmd_bad_crc = 0U;
+  rp.thr_apart_steps = 0U;
+  (void)canfdi_e2e_rx_init(&rp.rec_dtc_e2e, (uint16_t)CANFDI_RP_MSG_ECU_DTC_FRAME_ID, 2U);
+  rp.rec_e2e_bad = 0U;
   rp.start_decided = false;
   rp.settle_until_log_us = INT64_MIN;
   rp.gap_until_log_us = INT64_MIN;
@@ -1541,9 +1582,9 @@ static void end_file(void)
   fprintf(ev, ",\"gaps\":%" PRIu64 ",\"back\":%" PRIu64 ",\"error_frames\":%" PRIu64 ",\"fd_frames\":%" PRIu64
               ",\"fd_line\":%" PRIu64 ",\"remote_frames\":%" PRIu64 ",\"remote_line\":%" PRIu64
               ",\"ext_frames\":%" PRIu64 ",\"ext_line\":%" PRIu64 ",\"cmd_bad_crc\":%" PRIu64
-              ",\"simstep_bad\":%" PRIu64 ",\"outliers\":%" PRIu64 ",\"channel\":",
+              ",\"rec_e2e_bad\":%" PRIu64 ",\"simstep_bad\":%" PRIu64 ",\"outliers\":%" PRIu64 ",\"channel\":",
           rp.gaps, rp.back_n, rp.err_frames, rp.fd_frames, rp.fd_line, rp.remote_frames, rp.remote_line,
-          rp.ext_frames, rp.ext_line, rp.cmd_bad_crc, rp.simstep_bad, rp.outliers);
+          rp.ext_frames, rp.ext_line, rp.cmd_bad_crc, rp.rec_e2e_bad, rp.simstep_bad, rp.outliers);
   ev_str(rp.chan_fixed ? rp.chan : "", rp.chan_fixed ? strlen(rp.chan) : 0U);
   fprintf(ev, ",\"other_channels\":{");
   for (i = 0U; i < rp.n_other; i++) {
