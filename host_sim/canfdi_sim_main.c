@@ -283,7 +283,8 @@ static int write_stats(const char *path, const can_opts_t *o, const canfdi_sim_r
           "  \"frames_tx\": %lu,\n  \"frames_rx\": %lu,\n  \"frames_tx_lost\": %lu,\n"
           "  \"wait_us\": {\"mean\": %.1f, \"max\": %.1f},\n"
           "  \"late_steps\": %llu,\n  \"late_us_max\": %.1f,\n"
-          "  \"injects\": %lu,\n  \"clears\": %lu,\n  \"overrides\": %lu,\n  \"rejected\": %lu\n}\n",
+          "  \"injects\": %lu,\n  \"clears\": %lu,\n  \"overrides\": %lu,\n  \"rejected\": %lu,\n"
+          "  \"actuators_rejected\": %lu\n}\n",
           o->iface, o->realtime ? "realtime" : "lockstep", (unsigned long long)st->steps,
           (double)st->steps * 1e-3, st->wall_s,
           (st->wall_s > 0.0) ? ((double)st->steps / st->wall_s) : 0.0, (unsigned long)c->diag.tx,
@@ -291,7 +292,7 @@ static int write_stats(const char *path, const can_opts_t *o, const canfdi_sim_r
           (waits > 0U) ? (st->wait_us_sum / (double)waits) : 0.0, st->wait_us_max,
           (unsigned long long)st->late_steps, st->late_us_max, (unsigned long)r->diag.injects,
           (unsigned long)r->diag.clears, (unsigned long)r->diag.overrides,
-          (unsigned long)r->diag.rejected);
+          (unsigned long)r->diag.rejected, (unsigned long)r->diag.act_rejected);
   if (fclose(f) != 0) {
     rc = -CANFDI_EIO;
   }

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "comm/canfdi_e2e.h"
 #include "core/canfdi_common.h"
 #include "gen/canfdi_faults.h"
 #include "gen/canfdi_sim_msg.h"
@@ -116,6 +117,14 @@ static int rx_inject(canfdi_sim_rig_t *r, const canfdi_sim_frame_t *f, canfdi_si
   return rc;
 }
 
+/* An actuator frame a power stage would take: 8 bytes, the E2E CRC over
+ * its data ID (the CAN ID) and bytes 1..7 right. */
+static bool act_e2e_ok(const canfdi_sim_frame_t *f)
+{
+  return (f->dlc == CANFDI_E2E_FRAME_LEN) &&
+         (canfdi_e2e_frame_crc((uint16_t)f->id, f->data, CANFDI_E2E_FRAME_LEN) == f->data[CANFDI_E2E_CRC_BYTE]);
+}
+
 int canfdi_sim_rig_rx(canfdi_sim_rig_t *r, const canfdi_sim_frame_t *f, canfdi_sim_rig_event_t *ev)
 {
   int rc = -CANFDI_EINVAL;
@@ -127,7 +136,9 @@ int canfdi_sim_rig_rx(canfdi_sim_rig_t *r, const canfdi_sim_frame_t *f, canfdi_s
   switch (f->id) {
   case CANFDI_SIM_MSG_DCM_ACTUATOR_FRAME_ID: {
     struct canfdi_sim_msg_dcm_actuator_t a;
-    if (canfdi_sim_msg_dcm_actuator_unpack(&a, f->data, f->dlc) == 0) {
+    if (!act_e2e_ok(f)) {
+      r->diag.act_rejected++;
+    } else if (canfdi_sim_msg_dcm_actuator_unpack(&a, f->data, f->dlc) == 0) {
       r->in.dcm.u_cmd_V = canfdi_sim_msg_dcm_actuator_dcm_ua_cmd_decode(a.dcm_ua_cmd);
       r->in.dcm.bridge = a.dcm_bridge_sel;
       r->in.dcm.enable = (a.dcm_enable != 0U);
@@ -139,7 +150,9 @@ int canfdi_sim_rig_rx(canfdi_sim_rig_t *r, const canfdi_sim_frame_t *f, canfdi_s
   }
   case CANFDI_SIM_MSG_THR_ACTUATOR_FRAME_ID: {
     struct canfdi_sim_msg_thr_actuator_t a;
-    if (canfdi_sim_msg_thr_actuator_unpack(&a, f->data, f->dlc) == 0) {
+    if (!act_e2e_ok(f)) {
+      r->diag.act_rejected++;
+    } else if (canfdi_sim_msg_thr_actuator_unpack(&a, f->data, f->dlc) == 0) {
       r->in.thr.u_cmd_V = canfdi_sim_msg_thr_actuator_thr_u_cmd_decode(a.thr_u_cmd);
       r->in.thr.enable = (a.thr_enable != 0U);
       r->got_act_thr = true;

@@ -42,9 +42,12 @@
  * (host_sim/SCENARIO.md, "canfdi-sim on SocketCAN"; dbc/canfdi.dbc). The
  * `load fan` share of the scenario is never sent (unknown to the ECU).
  *
- * Actuator frames are applied as decoded, without an E2E check (the plant
- * has no supervisor). Every frame is
- * packed and unpacked only by host_sim's generated PLANT codec
+ * Actuator frames are applied only with 8 bytes and the right E2E CRC
+ * (data ID = CAN ID, comm/canfdi_e2e.h), as a power stage that checks its
+ * command frames would: a corrupted frame or one forged without the CRC
+ * leaves the previous command in force (counted in diag.act_rejected).
+ * The counter is not judged (a restarted ECU starts a new sequence). Every
+ * frame is packed and unpacked only by host_sim's generated PLANT codec
  * (host_sim/gen/canfdi_sim_msg.h).
  *
  * Determinism: with the same scenario and the same received frames at the
@@ -84,6 +87,7 @@ typedef struct {
   uint32_t frames_tx;        /* frames returned by _begin and _sim_step */
   uint32_t frames_rx;        /* frames given to _rx */
   uint32_t actuators;        /* actuator frames applied */
+  uint32_t act_rejected;     /* actuator frames not applied: DLC or E2E CRC wrong */
   uint32_t injects;          /* faults added by SimFaultInject */
   uint32_t clears;           /* SimFaultClear frames obeyed */
   uint32_t overrides;        /* external setpoint frames obeyed */
