@@ -588,6 +588,8 @@ static void pthr_observe(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *i
      * whereas a sensor offset, even a drifting one, barely changes within
      * a few steps: follow the jump-robust sensor increment instead. */
     th_p = canfdi_add_s64_sat(p->th_hat_q32, s->inc_q32);
+  } else {
+    /* the model's prediction */
   }
   if (s->src != CANFDI_PARITY_THR_SRC_NONE) {
     const int32_t y = (s->src == CANFDI_PARITY_THR_SRC_MEAN)   ? s->th_mean
