@@ -10,7 +10,8 @@
 #                      each harness until it has run that many inputs (no
 #                      time limit); libFuzzer's pulse lines show progress
 #   Every fuzzing run appends a line to $(BUILD)/bench/fuzz.tsv: harness,
-#   commit, executions, seconds, executions per second, new inputs, result.
+#   commit, executions, seconds, executions per second, new inputs, result
+#   (ok, crash, or interrupted: stopped by a signal).
 #   make fuzz-test     (make test) replay every seed corpus and regression
 #                      input, then fuzz each harness FUZZ_TEST_SECONDS (12)
 #   make fuzz-build    build the harnesses only
@@ -129,8 +130,10 @@ fuzz_run = set -eo pipefail; h=$(1); \
 	stat() { grep -a -E "^stat::$$1:" $(FUZZ_OUT)/$$h.log | awk '{print $$2}'; }; \
 	printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' $$h "$$(git rev-parse --short HEAD 2>/dev/null || echo -)" \
 	  "$$(stat number_of_executed_units)" $$(( $$(date +%s) - t0 )) "$$(stat average_exec_per_sec)" \
-	  "$$(stat new_units_added)" $$([ $$rc = 0 ] && echo ok || echo crash) >>$(BUILD)/bench/fuzz.tsv; \
-	[ $$rc = 0 ] || { tail -60 $(FUZZ_OUT)/$$h.log; echo "fuzz_$$h: crash, input in $(FUZZ_OUT)/crash/"; exit 1; }; \
+	  "$$(stat new_units_added)" $$(if [ $$rc = 0 ]; then echo ok; elif grep -aq 'run interrupted' $(FUZZ_OUT)/$$h.log; \
+	  then echo interrupted; else echo crash; fi) >>$(BUILD)/bench/fuzz.tsv; \
+	[ $$rc = 0 ] || { tail -60 $(FUZZ_OUT)/$$h.log; grep -aq 'run interrupted' $(FUZZ_OUT)/$$h.log && echo "fuzz_$$h: interrupted" || \
+	  echo "fuzz_$$h: crash, input in $(FUZZ_OUT)/crash/"; exit 1; }; \
 	grep -a -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added)' $(FUZZ_OUT)/$$h.log | tr '\n' ' '; echo
 
 fuzz: $(patsubst %,$(FUZZ_OUT)/fuzz_%,$(filter-out $(FUZZ_PY),$(FUZZ_HARNESSES)))
