@@ -6,6 +6,12 @@
 #                      one after the other; new inputs go to
 #                      $(BUILD)/fuzz/found/<harness>/, crashes to
 #                      $(BUILD)/fuzz/crash/ (a crash fails the target)
+#   make fuzz FUZZ_RUNS=10000000
+#                      each harness until it has run that many inputs (no
+#                      time limit); libFuzzer's pulse lines show progress
+#   Every fuzzing run appends a line to $(BUILD)/bench/fuzz.tsv: harness,
+#   commit, executions, seconds, executions per second, new inputs, result
+#   (ok, crash, or interrupted: stopped by a signal).
 #   make fuzz-test     (make test) replay every seed corpus and regression
 #                      input, then fuzz each harness FUZZ_TEST_SECONDS (12)
 #   make fuzz-build    build the harnesses only
@@ -23,6 +29,7 @@
 
 FUZZ_CC ?= clang
 FUZZ_SECONDS ?= 60
+FUZZ_RUNS ?=
 FUZZ_TEST_SECONDS ?= 12
 FUZZ_DIR := tests/fuzz
 FUZZ_OUT := $(BUILD)/fuzz
@@ -37,6 +44,21 @@ FUZZ_CFLAGS := $(C_STD) -O1 -g -fno-omit-frame-pointer $(FUZZ_SANITIZE) $(FW_INC
                -Ihost_sim -Itools/replay -I$(FUZZ_DIR)
 
 FUZZ_FW_OBJ := $(FW_SRC:%.c=$(FUZZ_OUT)/obj/%.o)
+# Comparison tracing (-fsanitize-coverage=trace-cmp, part of
+# -fsanitize=fuzzer) guides the fuzzer through the comparisons of code that
+# parses bytes; in the layers that compute (model, detection, control,
+# diagnosis, DTC routing, fault tolerance, outputs) it calls a hook on every
+# comparison of every loop of every 1 ms step, and the stateful harnesses
+# spent most of their time there. Those files keep edge coverage and every
+# sanitizer; what reads bytes from outside keeps comparison tracing: the
+# receive path, E2E and ISO-TP (comm/), the UDS server (uds/), the NVM
+# loader and the DTC memory's image (diag/canfdi_nvm.c, diag/canfdi_dtc.c),
+# the application's frame and UDS entry points (app/canfdi_app.c,
+# app/canfdi_app_uds.c), host_sim, tools/replay and the harnesses.
+FUZZ_CMP_SRC := $(filter firmware/uds/%,$(FW_SRC)) firmware/comm/canfdi_rx.c firmware/comm/canfdi_e2e.c \
+                firmware/comm/canfdi_isotp.c firmware/diag/canfdi_nvm.c
+FUZZ_NOCMP_OBJ := $(patsubst %.c,$(FUZZ_OUT)/obj/%.o,$(filter-out $(FUZZ_CMP_SRC),$(FW_SRC)))
+$(FUZZ_NOCMP_OBJ): FUZZ_CFLAGS += -fno-sanitize-coverage=trace-cmp
 FUZZ_SIM_SRC := $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,$(sort $(wildcard host_sim/*.c))) \
                 $(sort $(wildcard host_sim/gen/*.c))
 FUZZ_SIM_OBJ := $(FUZZ_SIM_SRC:%.c=$(FUZZ_OUT)/obj/%.o)
@@ -91,21 +113,31 @@ $(foreach h,$(FUZZ_ALL),$(eval $(call FUZZ_RULE,$(h))))
 .PHONY: fuzz fuzz-test fuzz-build
 fuzz-build: $(FUZZ_BIN)
 
-# $(call fuzz_run,HARNESS,SECONDS): replay the seeds and regressions, then
-# fuzz for SECONDS from them; new inputs in $(FUZZ_OUT)/found/HARNESS.
-fuzz_run = set -e; h=$(1); \
-	mkdir -p $(FUZZ_OUT)/found/$$h $(FUZZ_OUT)/crash; \
+# $(call fuzz_run,HARNESS,SECONDS[,RUNS]): replay the seeds and
+# regressions, then fuzz for SECONDS (or, given RUNS, until RUNS inputs ran)
+# from them; new inputs in $(FUZZ_OUT)/found/HARNESS, a line in
+# $(BUILD)/bench/fuzz.tsv.
+fuzz_run = set -eo pipefail; h=$(1); \
+	mkdir -p $(FUZZ_OUT)/found/$$h $(FUZZ_OUT)/crash $(BUILD)/bench; \
 	dirs=""; for d in $(FUZZ_DIR)/corpus/$$h $(FUZZ_DIR)/regress/$$h; do [ -d $$d ] && dirs="$$dirs $$d"; done; \
 	echo "== fuzz_$$h: replay$$dirs"; \
 	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) -runs=0 $$dirs 2>$(FUZZ_OUT)/$$h.replay.log || { cat $(FUZZ_OUT)/$$h.replay.log; exit 1; }; \
-	echo "== fuzz_$$h: $(2) s"; \
-	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) -max_total_time=$(2) -print_final_stats=1 -timeout=10 -rss_limit_mb=1024 \
-	  -artifact_prefix=$(FUZZ_OUT)/crash/$$h- $(FUZZ_OUT)/found/$$h $$dirs >$(FUZZ_OUT)/$$h.log 2>&1 || \
-	  { tail -60 $(FUZZ_OUT)/$$h.log; echo "fuzz_$$h: crash, input in $(FUZZ_OUT)/crash/"; exit 1; }; \
-	grep -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added)' $(FUZZ_OUT)/$$h.log | tr '\n' ' '; echo
+	$(if $(3),limit="-runs=$(3)"; echo "== fuzz_$$h: $(3) executions";,limit="-max_total_time=$(2)"; echo "== fuzz_$$h: $(2) s";) \
+	t0=$$(date +%s); rc=0; \
+	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) $$limit -print_final_stats=1 -timeout=10 -rss_limit_mb=1024 \
+	  -artifact_prefix=$(FUZZ_OUT)/crash/$$h- $(FUZZ_OUT)/found/$$h $$dirs 2>&1 | tee $(FUZZ_OUT)/$$h.log | \
+	  { $(if $(3),grep -a --line-buffered -E '^#[0-9]+[[:space:]]+pulse' || true,cat >/dev/null); } || rc=$$?; \
+	stat() { grep -a -E "^stat::$$1:" $(FUZZ_OUT)/$$h.log | awk '{print $$2}'; }; \
+	printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' $$h "$$(git rev-parse --short HEAD 2>/dev/null || echo -)" \
+	  "$$(stat number_of_executed_units)" $$(( $$(date +%s) - t0 )) "$$(stat average_exec_per_sec)" \
+	  "$$(stat new_units_added)" $$(if [ $$rc = 0 ]; then echo ok; elif grep -aq 'run interrupted' $(FUZZ_OUT)/$$h.log; \
+	  then echo interrupted; else echo crash; fi) >>$(BUILD)/bench/fuzz.tsv; \
+	[ $$rc = 0 ] || { tail -60 $(FUZZ_OUT)/$$h.log; grep -aq 'run interrupted' $(FUZZ_OUT)/$$h.log && echo "fuzz_$$h: interrupted" || \
+	  echo "fuzz_$$h: crash, input in $(FUZZ_OUT)/crash/"; exit 1; }; \
+	grep -a -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added)' $(FUZZ_OUT)/$$h.log | tr '\n' ' '; echo
 
 fuzz: $(patsubst %,$(FUZZ_OUT)/fuzz_%,$(filter-out $(FUZZ_PY),$(FUZZ_HARNESSES)))
-	@$(foreach h,$(FUZZ_HARNESSES),$(call fuzz_run,$(h),$(FUZZ_SECONDS));)
+	@$(foreach h,$(FUZZ_HARNESSES),$(call fuzz_run,$(h),$(FUZZ_SECONDS),$(FUZZ_RUNS));)
 
 fuzz-test: deps $(FUZZ_BIN)
 	@$(foreach h,$(FUZZ_ALL) $(FUZZ_PY),$(call fuzz_run,$(h),$(FUZZ_TEST_SECONDS));)
