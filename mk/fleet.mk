@@ -5,7 +5,7 @@
 #                           end, rerun, a failed file, carried memory = one
 #                           long replay, Parquet read by pandas/pyarrow/DuckDB/
 #                           Polars (part of make test)
-#   make fleet-acceptance   issue 16's acceptance on a 20 x 10 fleet of 60 s
+#   make fleet-acceptance   the fleet acceptance (docs/fleet.md) on a 20 x 10 fleet of 60 s
 #                           drives (FLEET_SEED=1): per vehicle found/missed/
 #                           false, drive error, RUL vs truth, memory chain =
 #                           long replay = vehicle ECU

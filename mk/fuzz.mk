@@ -1,5 +1,5 @@
 # mk/fuzz.mk — libFuzzer harnesses over everything that reads bytes from
-# outside (issue 15; tests/fuzz/README.md, README "Hostile input"):
+# outside (tests/fuzz/README.md, README "Hostile input"):
 #
 #   make fuzz [FUZZ_SECONDS=60] [FUZZ_HARNESSES="app_rx uds"]
 #                      every harness (or those named) for FUZZ_SECONDS each,

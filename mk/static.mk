@@ -1,4 +1,4 @@
-# mk/static.mk — static analysis of the firmware (issue 15; docs/misra.md):
+# mk/static.mk — static analysis of the firmware (docs/misra.md):
 #
 #   make static-check   (make test) cppcheck with its MISRA C:2012 addon
 #                       (tools/static/cppcheck.sh) and clang-tidy's

@@ -113,7 +113,7 @@
  * With a tester's requests in flight (`make pil-test`, the SIL log of
  * tests/sil/scenarios/uds_workshop.scn): at most 39 938 (M4) / 84 096 (M0)
  * in those steps, within the same run's maxima (42 083 / 86 851).
- * Rate schedule (issue 13, part 2; started, not finished): a 10 ms frame of
+ * Rate schedule (started, not finished; docs/porting.md): a 10 ms frame of
  * CANFDI_APP_FRAME_SLOTS 1 ms slots (app->slot). Every step: input
  * supervision, vote, control, gates, parity residuals and the estimators'
  * SVFs (their RLS updates decimated inside the modules: est_dcm electrical

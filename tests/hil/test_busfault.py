@@ -1,4 +1,4 @@
-"""Bus faults in HIL (issue 15, item 6): the ECU's interface going down and
+"""Bus faults in HIL: the ECU's interface going down and
 up under the running ECU, error frames and bus-off of a real kernel CAN
 driver (slcan on a pty), the sensor node (canfdi-sim) restarting, a second
 node sending the ECU's own identifiers. In each the ECU keeps its loop,
