@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Atheris harness of the Python readers of outside files. (tests/fuzz/README.md)
+"""Atheris harness of the Python readers of outside files (tests/fuzz/README.md).
 
     .venv/bin/python tests/fuzz/py/fuzz_py_readers.py [libFuzzer options] [corpus dirs]
 
