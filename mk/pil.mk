@@ -89,6 +89,45 @@ bench-pil: $(PIL_SIL_BIN) $(PIL_ELFS) $(RLS_PIL_ELFS)
 
 BENCH_STEPS += bench-pil
 
+# The step's cost on hostile input: fuzz_app_rx's inputs (its corpus, its
+# regressions and, at most PIL_COST_FOUND of them, what `make fuzz` or
+# fuzz-test found: build/fuzz/found/app_rx) written out as one log by the
+# harness itself (tests/fuzz/fuzz_export.h) and run on the M4 and the M0
+# (tests/pil/pil_step.c built with PIL_COST): every step's instructions
+# against the stated worst case of firmware/app/canfdi_app.h,
+# PIL_COST_BOUND_<machine>. Fails when a step costs more; figures in
+# $(BUILD)/bench/pil_cost.json.
+PIL_COST_MACHINES := m4 m0
+PIL_COST_BOUND_m4 := 50000
+PIL_COST_BOUND_m0 := 110000
+PIL_COST_FOUND ?= 300
+PIL_COST_ELFS := $(foreach m,$(PIL_COST_MACHINES),$(PIL_DIR)/pil_cost_$(m).elf)
+PIL_EXPORT := $(PIL_DIR)/fuzz-export-app-rx
+define PIL_COST_RULES
+$(PIL_DIR)/pil_cost_$(1).elf: tests/pil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPTS)
+	@mkdir -p $$(@D)
+	$(ARM_CC) $(TGT_ARCH_$(call pil_core,$(1))) $(TGT_CFLAGS) -DPIL_COST -DBENCH_TICKS_NUM=$(call pil_num,$(1))U \
+	  -DBENCH_TICKS_DEN=$(call pil_den,$(1))U --specs=rdimon.specs $(call tgt_link,$(call pil_ld,$(1))) \
+	  -o $$@ $$(filter %.c,$$^)
+endef
+$(foreach m,$(PIL_COST_MACHINES),$(eval $(call PIL_COST_RULES,$(m))))
+# The harness as a plain program (no libFuzzer, no sanitizers; the
+# firmware with CANFDI_ASSERT on, like the host tests).
+$(PIL_EXPORT): $(FUZZ_DIR)/fuzz_export_main.c $(FUZZ_DIR)/fuzz_app_rx.c $(FUZZ_DIR)/fuzz_export.h $(FUZZ_RANGES_C) \
+    $(FUZZ_CODEC_DIR)/canfdi_rp_msg.c $(FW_SRC)
+	@mkdir -p $(@D)
+	$(CC) $(WARN_C) -O2 -DFUZZ_EXPORT_LOG $(FW_INC) $(HOST_ASSERT) -I$(FUZZ_DIR) -I$(FUZZ_CODEC_DIR) \
+	  -o $@ $(filter %.c,$^) -lm
+
+.PHONY: pil-cost
+pil-cost: $(PIL_EXPORT) $(PIL_COST_ELFS)
+	@python3 tests/pil/pil_cost.py --export $(PIL_EXPORT) --work $(PIL_DIR)/cost --json $(BUILD)/bench/pil_cost.json \
+	  --found $(FUZZ_OUT)/found/app_rx --found-max $(PIL_COST_FOUND) \
+	  $(foreach m,$(PIL_COST_MACHINES),--machine $(m):$(call pil_qemu,$(m)):$(call pil_core,$(m)):$(PIL_DIR)/pil_cost_$(m).elf:$(PIL_COST_BOUND_$(m))) \
+	  $(FUZZ_DIR)/corpus/app_rx $(FUZZ_DIR)/regress/app_rx
+
+TEST_STEPS += pil-cost
+
 # Footprint: the application image per machine (the port's loop on the
 # empty board), every object compiled with -fstack-usage and
 # -fcallgraph-info=su; tests/pil/footprint.py reads the map and the graph.

@@ -113,6 +113,13 @@
  * With a tester's requests in flight (`make pil-test`, the SIL log of
  * tests/sil/scenarios/uds_workshop.scn): at most 39 938 (M4) / 84 096 (M0)
  * in those steps, within the same run's maxima (42 083 / 86 851).
+ * Stated worst case, whatever the step receives: 50 000 instructions on
+ * the M4, 110 000 on the M0 (the PIL scenarios' maxima, 44 943 / 96 694,
+ * with ~10 % margin). `make pil-cost` checks it on hostile input: the
+ * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
+ * jittered steps) run on QEMU; 304 inputs, 121 725 steps: at most 39 547
+ * (M4) / 76 433 (M0), rejected and implausible input costs less than the
+ * models running on valid data.
  * Rate schedule (started, not finished; docs/porting.md): a 10 ms frame of
  * CANFDI_APP_FRAME_SLOTS 1 ms slots (app->slot). Every step: input
  * supervision, vote, control, gates, parity residuals and the estimators'

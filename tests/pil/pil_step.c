@@ -22,6 +22,14 @@
  * differs, 2 when the run cannot start, 3 when the stack and the heap met
  * (the run's results are then not to be trusted).
  *
+ * Built with PIL_COST (`make pil-cost`, tests/pil/pil_cost.py) it reads
+ * the log fuzz_app_rx's inputs were written to (tests/fuzz/fuzz_export.h):
+ * every frame line is received at its time whatever its identifier, the
+ * id FFFFFFFF is a step at its time and FFFFFFFE a new input (the
+ * application initialised again); nothing is compared, and a further line
+ *   pil: cost_inputs N max_input I
+ * says how many inputs ran and in which one the costliest step was.
+ *
  * The harness uses no stdio and no heap: the log is read with read() into
  * a static chunk and the results are formatted here and written with
  * write(); the run ends with _exit(). newlib's FILEs, 1 KiB buffers, printf
@@ -178,6 +186,12 @@ static bool uds_rx_this_step;
 static uint32_t uds_steps;
 static uint32_t uds_ticks_max;
 static uint32_t uds_max_step;
+#ifdef PIL_COST
+#define COST_STEP_ID 0xFFFFFFFFU
+#define COST_RESET_ID 0xFFFFFFFEU
+static uint32_t cost_inputs;
+static uint32_t cost_max_input;
+#endif
 
 static int hexval(char c)
 {
@@ -267,6 +281,9 @@ static void do_step(uint32_t t_us)
   if (d > ticks_max) {
     ticks_max = d;
     max_step = steps;
+#ifdef PIL_COST
+    cost_max_input = cost_inputs - 1U;
+#endif
   }
   {
     bool uds = uds_rx_this_step;
@@ -283,6 +300,11 @@ static void do_step(uint32_t t_us)
     uds_rx_this_step = false;
   }
   steps++;
+#ifdef PIL_COST
+  if (n < 0) {
+    mismatches++;
+  }
+#else
   compared++;
   if ((n < 0) || ((unsigned)n != n_logged)) {
     mismatches++;
@@ -295,6 +317,7 @@ static void do_step(uint32_t t_us)
       }
     }
   }
+#endif
   if ((mismatches != 0U) && (first_diff == UINT32_MAX)) {
     first_diff = steps - 1U;
   }
@@ -336,6 +359,21 @@ int main(void)
     if (parse_line(line, &t_us, &fr) != 0) {
       continue;
     }
+#ifdef PIL_COST
+    if (fr.id == COST_STEP_ID) {
+      do_step(t_us);
+    } else if (fr.id == COST_RESET_ID) {
+      if (app_init() != CANFDI_OK) {
+        finish("pil: init failed\n", 2);
+      }
+      cost_inputs++;
+    } else if (cost_inputs > 0U) {
+      (void)canfdi_app_rx_frame(&app, fr.id, fr.data, fr.dlc, t_us);
+    } else {
+      /* before the first input: not a cost log */
+    }
+    continue;
+#endif
     if (have && (t_us != cur_t)) {
       do_step(cur_t);
     }
@@ -367,6 +405,11 @@ int main(void)
     out_kv(" first ", first_diff);
     out_s("\n");
   }
+#ifdef PIL_COST
+  out_kv("pil: cost_inputs ", cost_inputs);
+  out_kv(" max_input ", cost_max_input);
+  out_s("\n");
+#endif
   if (uds_steps > 0U) {
     out_kv("pil: uds_steps ", uds_steps);
     out_kv(" max ", (uint32_t)(((uint64_t)uds_ticks_max * BENCH_TICKS_DEN) / BENCH_TICKS_NUM));
