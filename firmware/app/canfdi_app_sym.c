@@ -302,9 +302,15 @@ static void thr_parameters(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   s->thr_pdev_q16[CANFDI_SYM_THR_P_SPRING] = canfdi_est_thr_fast_spring_dev_q16(e);
   s->thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] = canfdi_est_thr_fast_friction_dev_q16(e);
   s->thr_upd = in->thr_est_on ? canfdi_est_thr_updated(e) : 0U;
-  s->thr_pdev_valid = !in->thr_est_on ? 0U
-                                      : (uint8_t)((canfdi_est_thr_el_converged(e) ? 0x03U : 0U) |
-                                                  (canfdi_est_thr_fast_valid(e) ? 0x0CU : 0U));
+  /* the friction deviation only from a direction-paired solution (see
+   * "Direction pairing" in canfdi_est_thr.h); the spring deviation of an
+   * unpaired one still shows that the resisting torque changed, and with
+   * friction unknown no rule can isolate on it: the need for a test burst */
+  s->thr_pdev_valid =
+      !in->thr_est_on ? 0U
+                      : (uint8_t)((canfdi_est_thr_el_converged(e) ? 0x03U : 0U) |
+                                  (canfdi_est_thr_fast_valid(e) ? (1U << CANFDI_SYM_THR_P_SPRING) : 0U) |
+                                  (canfdi_est_thr_fast_paired(e) ? (1U << CANFDI_SYM_THR_P_FRICTION) : 0U));
 }
 
 static uint32_t flags(const canfdi_app_sym_in_t *in)

@@ -42,6 +42,7 @@ void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
   cfg->fast_min_updates = 100U;
   cfg->fast_sep_min_q16 = CANFDI_Q16_MILLI(250);
   cfg->fast_stale_steps = 500U;
+  cfg->fast_pair_steps = 300U;
 }
 
 /* EW mean m += (x - m) 2^-shift, Q32; rounded, saturating. */
@@ -76,6 +77,10 @@ static void fast_update(canfdi_est_thr_t *e, int32_t i_q16, int32_t a_q16, int32
   e->f_sr_q32 = ew_q32(e->f_sr_q32, (int64_t)s_q16 * r_q16, sh);
   e->f_n = (e->f_n < UINT16_MAX) ? (uint16_t)(e->f_n + 1U) : e->f_n;
   e->f_age = 0U;
+  if (s_q16 > 0) {
+    e->f_open_age = 0U;
+  }
+  e->f_paired = (s_q16 > 0) || (e->f_open_age <= c->fast_pair_steps);
   canfdi_count_inc(&e->diag.fast_updates);
   {
     /* Q32 -> Q24: |c|, |r| <= 16 N m, |s| <= 1: every product < 2^61 */
@@ -205,7 +210,9 @@ void canfdi_est_thr_reset(canfdi_est_thr_t *e, bool keep_theta)
   e->f_fric_dev_q16 = 0;
   e->f_n = 0U;
   e->f_age = UINT16_MAX;
+  e->f_open_age = UINT16_MAX;
   e->f_sep = false;
+  e->f_paired = false;
   canfdi_count_inc(&e->diag.resets);
 }
 
@@ -327,6 +334,7 @@ void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int3
     canfdi_svf_step(&e->svf_a, angle_q16);
     canfdi_svf_step(&e->svf_s, s);
     e->f_age = (e->f_age < UINT16_MAX) ? (uint16_t)(e->f_age + 1U) : e->f_age;
+    e->f_open_age = (e->f_open_age < UINT16_MAX) ? (uint16_t)(e->f_open_age + 1U) : e->f_open_age;
     e->phase = (uint8_t)(e->phase + 1U);
     if (e->phase >= e->cfg.decim) {
       e->phase = 0U;
@@ -409,6 +417,11 @@ int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e)
 bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e)
 {
   return e->f_sep && (e->f_n >= e->cfg.fast_min_updates) && (e->f_age <= e->cfg.fast_stale_steps);
+}
+
+bool canfdi_est_thr_fast_paired(const canfdi_est_thr_t *e)
+{
+  return canfdi_est_thr_fast_valid(e) && e->f_paired;
 }
 
 bool canfdi_est_thr_has_run(const canfdi_est_thr_t *e)

@@ -66,6 +66,26 @@
  * = 1 - corr(c, s)^2 measures (fast_sep_min). Valid after fast_min_updates
  * updates, while separable and within fast_stale_steps of the last update
  * (a valve that stopped moving keeps no stale verdict).
+ * Direction pairing. In one direction of motion a weaker spring and a
+ * higher friction are alike: closing, the spring aids the motion and
+ * friction opposes it, so either lowers r (a c < 0, or -b < 0); opening,
+ * a weaker spring lowers r and a higher friction raises it. Only the
+ * difference between the directions separates them, and only if both
+ * directions' data describe the same plant. The means keep the last window
+ * of the other direction while the valve moves one way (a driver's 0.5 Hz
+ * sine gives one-way windows ~1 s apart): a change that arrives during a
+ * closing window, or a ramp between windows, is then split between a and
+ * b by the old opening data (a weakening spring reads as a friction rise,
+ * a friction step as a spring loss). The solution is therefore "paired"
+ * only when its last update was opening, or closing within
+ * fast_pair_steps of an opening update (canfdi_est_thr_fast_paired);
+ * opening data are not ambiguous for the catalogue faults (a weaker spring
+ * and a higher friction move r opposite ways), closing data are. 300 steps
+ * bound the error a ramp leaves: the fastest catalogue ramp, 30 % of the
+ * spring over 2 s, moves a by 0.15 x 0.3 = 4.5 %, i.e. b by 4.5 % x c / 2
+ * ~ 3 % of T_c, against the +8 % friction threshold; and the 2 Hz test
+ * burst (canfdi_app_cal.c) reverses every 0.25 s, so that with it on the
+ * closing windows are paired.
  * Why this is fast: the fault enters r at once and fully (a step of a c
  * or b s), and the two-regressor solution follows the EW mean with its
  * ~0.3 s memory, instead of waiting for a 5-parameter RLS to re-separate
@@ -158,6 +178,9 @@ typedef struct {
   uint16_t fast_min_updates; /* updates before the deviations are valid */
   int32_t fast_sep_min_q16; /* det / (m_cc m_ss) at or above: separable */
   uint16_t fast_stale_steps; /* valid only within this many steps of an update */
+  uint16_t fast_pair_steps; /* a solution last updated while closing is valid
+                             * only within this many steps of an opening
+                             * update (see "Direction pairing") */
 } canfdi_est_thr_cfg_t;
 
 /* Diagnostics counters: monotone, saturating at UINT32_MAX
@@ -206,7 +229,11 @@ typedef struct {
   uint16_t f_n;             /* updates since reset, saturating at UINT16_MAX */
   uint16_t f_age;           /* steps since the last update, saturating at
                              * UINT16_MAX (UINT16_MAX after reset: none yet) */
+  uint16_t f_open_age;      /* steps since the last opening update,
+                             * saturating at UINT16_MAX (likewise after reset) */
   bool f_sep;               /* last solution separable */
+  bool f_paired;            /* last update opening, or closing within
+                             * fast_pair_steps of an opening update */
   canfdi_est_thr_diag_t diag;
 } canfdi_est_thr_t;
 
@@ -224,7 +251,7 @@ typedef struct {
  * decays below 1e-3 in ~37 ms), nominal parameters of docs/design.md with
  * U_0 = 0 and theta_LH = 6.5 deg; fast test shift 6, valid after 100
  * updates while det / (m_cc m_ss) >= 1/4 and within 500 steps of the last
- * update.
+ * update, paired within 300 steps of an opening update.
  */
 void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg);
 
@@ -265,6 +292,12 @@ int32_t canfdi_est_thr_friction_q16(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_fast_spring_dev_q16(const canfdi_est_thr_t *e);
 int32_t canfdi_est_thr_fast_friction_dev_q16(const canfdi_est_thr_t *e);
 bool canfdi_est_thr_fast_valid(const canfdi_est_thr_t *e);
+
+/* Valid, and the last update was opening or closing within
+ * fast_pair_steps of an opening update ("Direction pairing" above): only
+ * then does the solution separate a weaker spring from a higher friction.
+ * O(1). */
+bool canfdi_est_thr_fast_paired(const canfdi_est_thr_t *e);
 
 /* As canfdi_est_dcm_has_run. O(1). */
 bool canfdi_est_thr_has_run(const canfdi_est_thr_t *e);
