@@ -150,8 +150,10 @@ static void stage_test(canfdi_app_t *app)
   /* a component's first symptom: its estimator becomes alert (covariance
    * boost), so that the parameter evidence the isolation may need arrives
    * within the diagnosis' freshness count */
+  app->dcm.est_restart = false;
   if ((rd != NULL) && rd->detected && !app->fb.dcm_detected) {
     canfdi_est_dcm_boost(&app->est_dcm);
+    app->dcm.est_restart = true;
   }
   if ((rt != NULL) && rt->detected && !app->fb.thr_detected) {
     canfdi_est_thr_boost(&app->est_thr);
@@ -232,6 +234,7 @@ static void stage_gates(canfdi_app_t *app)
   }
   if (re) {
     canfdi_est_dcm_reset(&app->est_dcm, true);
+    app->dcm.est_restart = true;
   }
   gate(&app->thr, thr_ok, thr_est, app->running, canfdi_est_thr_has_run(&app->est_thr), &rp, &re);
   if (rp) {
@@ -302,6 +305,7 @@ static void stage_diagnose(canfdi_app_t *app)
   si.est_dcm = &app->est_dcm;
   si.est_thr = &app->est_thr;
   si.dcm_est_on = app->dcm.est_on;
+  si.dcm_est_restart = app->dcm.est_restart;
   si.thr_est_on = app->thr.est_on;
   si.load_known_Nm_q16 = load_known_q16(app);
   si.load_nom_Nm_q16 = app->cal.load_nom_Nm_q16;

@@ -230,6 +230,8 @@ typedef struct {
   bool in_ok;     /* the plant's inputs VALID this step: parity equations run */
   bool started;   /* in_ok was true once since power-up: the drive may be energised */
   bool est_on;    /* the estimator was fed this step */
+  bool est_restart; /* this step the estimator's covariance was boosted or
+                     * reset: its memory starts again */
 } canfdi_app_gate_t;
 
 /*

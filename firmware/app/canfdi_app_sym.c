@@ -40,6 +40,8 @@ int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg
     m->jump = false;
     m->r1_mean_q32 = 0;
     m->e4_mean_q32 = 0;
+    m->r1_est_q32 = 0;
+    m->r1_est_w_q16 = 0;
     rc = CANFDI_OK;
   }
   return rc;
@@ -156,15 +158,54 @@ static void residuals(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   s->thr_rn_valid = ((pt != NULL) && in->thr_in_ok) ? pt->valid : 0U;
 }
 
-/* RAX (canfdi_symptoms.h): (R_A,est - R_A,model) I_A / r1 / 0.5 while |r1|
- * is RAX_MIN_RN times its threshold or more, 0 while r1 is in band
- * (nothing to explain), not valid in between (an incipient R_A rise first
- * crosses the r1 band while its estimate is still inside its spread: a
- * "not explained" there would name a speed offset);
+static int32_t sgn_s32(int32_t x)
+{
+  return (x > 0) ? 1 : ((x < 0) ? -1 : 0);
+}
+
+/* r1 as the armature estimate sees it (RAX): the RLS with forgetting
+ * lambda = 1 - forget weights its k-th last update by lambda^k, and a
+ * boost or reset of its covariance drops the data before it, so the
+ * estimate fits r1 averaged with those weights: on every armature update
+ * W = lambda W + 1, mean += (r1 - mean) / W (W restarts at 0 with the
+ * covariance; 1 / W falls from 1 to forget). An R_A change moves the
+ * estimate by this mean / I_A, not by the r1 of this step: while R_A ramps
+ * the estimate lags r1 by its memory (forget^-1 updates) times the ramp
+ * rate, and compared with r1 itself an R_A ramp would read as unexplained.
+ * Scaling: W Q16.16 (<= 1 / forget, 100 by default; Q16.16 holds 32767),
+ * 1 / W in Q31 saturated at 1 - 2^-31; the mean in Q32 V as the other
+ * means of this module. */
+static void r1_est_mean(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, const canfdi_symptoms_t *s)
+{
+  const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
+  if (in->dcm_est_restart) {
+    m->r1_est_w_q16 = 0;
+  }
+  if ((pd != NULL) && in->dcm_in_ok && in->dcm_est_on && ((pd->valid & 1U) != 0U) &&
+      ((s->dcm_upd & CANFDI_SYM_UPD_A) != 0U)) {
+    const int32_t w = canfdi_add_s32_sat(
+        canfdi_sub_s32_sat(m->r1_est_w_q16, canfdi_mul_s32_qn(m->r1_est_w_q16, in->est_dcm->cfg.forget_q31, 31U)),
+        CANFDI_Q16_ONE);
+    /* 1 / W in Q31: 2^47 / W_q16, saturated below 1 */
+    const int64_t inv = ((int64_t)1 << 47) / (int64_t)w;
+    const canfdi_q31_t al = (inv > (int64_t)INT32_MAX) ? (canfdi_q31_t)INT32_MAX : (canfdi_q31_t)inv;
+    const int64_t d = canfdi_sub_s64_sat((int64_t)pd->r_q16[0] * 65536, m->r1_est_q32);
+    m->r1_est_q32 = canfdi_add_s64_sat(m->r1_est_q32, canfdi_mul_s64_q31(d, al));
+    m->r1_est_w_q16 = w;
+  }
+}
+
+/* RAX (canfdi_symptoms.h): (R_A,est - R_A,model) I_A / r1_est / 0.5, with
+ * r1_est the r1 the estimate was fit on (r1_est_mean), while |r1| is
+ * RAX_MIN_RN times its threshold or more and r1_est is beyond the
+ * threshold with r1's sign; 0 while r1 is in band (nothing to explain);
+ * not valid otherwise (an incipient R_A rise first crosses the r1 band
+ * while its estimate is still inside its spread: a "not explained" there
+ * would name a speed offset);
  * valid while the armature estimate has converged and is fed. Scaling: the
  * model's R_A is Q24, taken to Q16.16; dR x I in Q16.16 V (rounded,
- * saturated); the quotient by r1 in Q16.16 times 2. */
-static void dcm_rax(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+ * saturated); the quotient by r1_est in Q16.16 times 2. */
+static void dcm_rax(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
   const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
   const canfdi_est_dcm_t *e = in->est_dcm;
@@ -172,24 +213,22 @@ static void dcm_rax(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
   if ((pd != NULL) && in->dcm_in_ok && in->dcm_est_on && canfdi_est_dcm_arm_converged(e) &&
       ((pd->valid & 1U) != 0U) && (pd->thr_q16[0] > 0)) {
     const int32_t a = canfdi_q31_abs(pd->r_q16[0]);
+    const int32_t r1e = canfdi_sat_s64_to_s32(canfdi_asr64_rnd(m->r1_est_q32, 16U));
     if (a < pd->thr_q16[0]) {
       s->flags |= CANFDI_SYM_F_DCM_RAX_VALID; /* nothing to explain */
-    } else if (a >= canfdi_mul_s32_qn(pd->thr_q16[0], (int32_t)CANFDI_APP_SYM_RAX_MIN_RN * CANFDI_Q16_ONE, 16U)) {
+    } else if ((a >= canfdi_mul_s32_qn(pd->thr_q16[0], (int32_t)CANFDI_APP_SYM_RAX_MIN_RN * CANFDI_Q16_ONE, 16U)) &&
+               (canfdi_q31_abs(r1e) >= pd->thr_q16[0]) && (sgn_s32(r1e) == sgn_s32(pd->r_q16[0]))) {
       const int32_t dr = canfdi_sub_s32_sat(canfdi_est_dcm_ra_q16(e), pd->ra_hat_ohm_q24 / 256);
       const int32_t du = canfdi_mul_s32_qn(dr, in->dcm_i_A_q16, 16U);
-      s->dcm_rax_q16 = canfdi_mul_s32_qn(canfdi_div_s32_qn(du, pd->r_q16[0], 16U), 2 * CANFDI_Q16_ONE, 16U);
+      s->dcm_rax_q16 = canfdi_mul_s32_qn(canfdi_div_s32_qn(du, r1e, 16U), 2 * CANFDI_Q16_ONE, 16U);
       s->flags |= CANFDI_SYM_F_DCM_RAX_VALID;
     } else {
-      /* r1 beyond its band by less than RAX_MIN_RN bands: an R_A change
-       * this small is inside the estimate's own spread, so the estimate
-       * can neither claim nor exclude it (not valid: '?') */
+      /* r1 beyond its band by less than RAX_MIN_RN bands, or the data the
+       * estimate was fit on not yet beyond it: an R_A change this small is
+       * inside the estimate's own spread, so the estimate can neither
+       * claim nor exclude it (not valid: '?') */
     }
   }
-}
-
-static int32_t sgn_s32(int32_t x)
-{
-  return (x > 0) ? 1 : ((x < 0) ? -1 : 0);
 }
 
 /* The flux-loss prediction of the header (canfdi_symptoms.h dcm_fx_q16). */
@@ -243,6 +282,7 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
         any = true;
         if ((sens[j] == 0) || (sgn_s32(pd->r_q16[j]) != sg[j])) {
           ok = false; /* no flux loss gives this residual */
+          s->flags |= CANFDI_SYM_F_DCM_FX_CONTRA;
         } else if (j == 0U) {
           d_r1 = canfdi_div_s32_qn(canfdi_q31_abs(r1_hp), sens[0], 28U);
           d_tot = canfdi_div_s32_qn(canfdi_q31_abs(pd->r_q16[0]), sens[0], 28U);
@@ -356,7 +396,8 @@ void canfdi_app_sym_build(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   s->flags = flags(in);
   speed_jump(m, in, s);
   s->flags |= m->jump ? CANFDI_SYM_F_DCM_W_JUMP : 0U;
-  dcm_rax(in, s);
+  r1_est_mean(m, in, s);
+  dcm_rax(m, in, s);
   dcm_flux_pred(m, in, s);
   s->dcm_ua_cmd_rn_q16 = uac_channel(in, s);
 }

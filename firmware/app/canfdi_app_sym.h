@@ -118,6 +118,9 @@ typedef struct {
   bool jump;                    /* the jump flag */
   int64_t r1_mean_q32;          /* r1's mean over the parity's load_tau (V, Q32) */
   int64_t e4_mean_q32;          /* R_A I_A - Psi w, its mean over load_tau (V, Q32) */
+  int64_t r1_est_q32;           /* r1 weighted as the armature estimate weights its
+                                 * data (V, Q32; RAX) */
+  int32_t r1_est_w_q16;         /* the sum of those weights, Q16.16 (<= 1 / forget) */
 } canfdi_app_sym_t;
 
 typedef struct {
@@ -129,6 +132,8 @@ typedef struct {
   const canfdi_est_thr_t *est_thr;
   bool dcm_est_on;                 /* the DC-motor estimator was fed this step */
   bool thr_est_on;                 /* the throttle estimator was fed this step */
+  bool dcm_est_restart;            /* the DC-motor estimator's covariance was
+                                    * boosted or reset this step */
   int32_t load_known_Nm_q16;       /* the load the models assume this step */
   int32_t load_nom_Nm_q16;         /* the calibrated nominal load (in mc_nom) */
   int32_t dcm_w_rad_s_q16;         /* measured speed */

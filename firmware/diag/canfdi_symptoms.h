@@ -63,6 +63,9 @@
 #define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 13) /* dcm_ua_cmd_rn_q16 valid */
 #define CANFDI_SYM_F_DCM_RAX_VALID (1UL << 14)    /* dcm_rax_q16 valid */
 #define CANFDI_SYM_F_DCM_FX_VALID (1UL << 15)     /* dcm_fx_q16 valid */
+#define CANFDI_SYM_F_DCM_FX_CONTRA (1UL << 16)    /* a DC-motor residual at or above
+                                                   * the zero level has a sign no
+                                                   * flux loss gives it (dcm_fx_q16) */
 
 /* Estimator updates (dcm_upd / thr_upd): A = the equation of R_A and Psi
  * (DC motor: armature) or R and K (throttle: electrical); B = the equation
@@ -98,9 +101,13 @@ typedef struct {
    * CANFDI_SYM_F_DCM_UA_CMD_VALID is set. */
   int32_t dcm_ua_cmd_rn_q16;
   /* The share of the armature residual r1 that the resistance estimate
-   * explains, (R_A,est - R_A,model) I_A / r1, / 0.5 (Q16.16: 1.0 = half of
-   * r1 explained). An R_A change moves the estimate by what r1 shows (share
-   * ~1); a sensor offset or a flux change leaves R_A alone (share ~0): at one
+   * explains, (R_A,est - R_A,model) I_A / r1_est, / 0.5 (Q16.16: 1.0 = half
+   * of r1 explained), with r1_est the r1 the estimate was fit on: r1
+   * weighted as the estimator weights its updates (its forgetting, from its
+   * last covariance boost or reset on; app/canfdi_app_sym.c). An R_A change
+   * moves the estimate by what r1 showed over that memory (share ~1, also
+   * while R_A ramps and the estimate lags r1 itself by its memory); a
+   * sensor offset or a flux change leaves R_A alone (share ~0): at one
    * operating point r1 alone cannot tell them apart. 0 while r1 is in its
    * band (nothing to explain). Valid (CANFDI_SYM_F_DCM_RAX_VALID) while the
    * armature estimator has converged and is fed. */
