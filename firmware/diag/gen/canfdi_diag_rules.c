@@ -3,7 +3,7 @@
 
 /* clang-format off */
 const canfdi_diag_model_rule_t canfdi_diag_model_rules[CANFDI_DIAG_N_RULES] = {
-  {CANFDI_FAULT_DCM_RA_UP, CANFDI_DIAG_COMP_DCM, 0U, "+Z.+ P0P. .0", "b..b .... .."}, /* R_A moves (estimator) and explains r1 (RAX) with r1/r4 up; Psi only supports (RAX says it already: a zero of Psi needs fresh updates while RAX+ does not); the mechanical equation untouched */
+  {CANFDI_FAULT_DCM_RA_UP, CANFDI_DIAG_COMP_DCM, 0U, "+Z.+ PZ.. .0", "b..b .... .."}, /* R_A moves (estimator) with r1/r4 up; the mechanical equation untouched */
   {CANFDI_FAULT_DCM_FLUX_DOWN, CANFDI_DIAG_COMP_DCM, 0U, "N++- 0N0. P0", "abba .... .."}, /* r1 Psi and J/Psi necessary; r2..r4 only support (load tracking pulls them back within seconds) */
   {CANFDI_FAULT_DCM_FRICTION_UP, CANFDI_DIAG_COMP_DCM, 0U, "ZPP+ 00.+ .0", ".aaa .... .."}, /* r2 r3 up with a clear zero r1 (the armature equation is untouched by friction) */
   {CANFDI_FAULT_DCM_IA_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "NPPZ .... 00", ".... .... .."}, /* r4 (no I_A) stays zero; r1 r2 r3 see the offset */
