@@ -282,6 +282,7 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
         any = true;
         if ((sens[j] == 0) || (sgn_s32(pd->r_q16[j]) != sg[j])) {
           ok = false; /* no flux loss gives this residual */
+          s->flags |= CANFDI_SYM_F_DCM_FX_CONTRA;
         } else if (j == 0U) {
           d_r1 = canfdi_div_s32_qn(canfdi_q31_abs(r1_hp), sens[0], 28U);
           d_tot = canfdi_div_s32_qn(canfdi_q31_abs(pd->r_q16[0]), sens[0], 28U);

@@ -159,6 +159,7 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
       d->fx_blind[j] = 0U;
       d->fx_low[j] = 0U;
     }
+    pers_clear(&d->fx_contra, CANFDI_DIAG_SYM_ZERO);
     d->corr_not_isolated = false;
     d->failed_mask = 0U;
   }
@@ -446,6 +447,9 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
       d->fx_low[i] = 0U;
     }
   }
+  pers_step(&d->fx_contra, true,
+            ((s->flags & CANFDI_SYM_F_DCM_FX_CONTRA) != 0U) ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO,
+            d->cfg.sym_on_steps, d->cfg.sym_off_steps);
   channel(d, CANFDI_DIAG_COMP_THR, 8U, 0, false);
   channel(d, CANFDI_DIAG_COMP_THR, 9U, 0, false);
   for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
@@ -603,8 +607,11 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
       const uint32_t zero = gate ? d->obs_zero_fx : d->obs_zero;
       uint32_t pct = 0U;
       uint32_t p2 = 0U;
-      bool cand = eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &rr, zero, &pct);
-      if ((r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &rr, zero, &p2)) {
+      /* a residual whose sign no flux loss gives rules the flux rule out,
+       * whatever its pattern's supporting entries score */
+      const bool ruled_out = (i == (uint32_t)d->flux_rule) && (d->fx_contra.state == CANFDI_DIAG_SYM_POS);
+      bool cand = !ruled_out && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &rr, zero, &pct);
+      if (!ruled_out && (r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &rr, zero, &p2)) {
         if (!cand || (p2 > pct)) {
           pct = p2;
         }

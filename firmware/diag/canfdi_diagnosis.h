@@ -131,6 +131,17 @@
  *    both estimators have had par_memory_updates updates since the
  *    symptoms appeared and a necessary parameter entry of the flux rule
  *    (Psi -, J/Psi +) is seen at zero or with the other sign.
+ *  - A residual against a flux loss (DC motor). A flux loss dPsi moves
+ *    each residual with a sign fixed by the operating point (r1 -dPsi w,
+ *    r2 r3 +dPsi I_A, r4 dPsi (R_A I_A - Psi w) / Psi: canfdi_symptoms.h
+ *    dcm_fx_q16); the load tracking pulls r2..r4 back towards zero but
+ *    never past it. A residual at or above the zero level with the other
+ *    sign (CANFDI_SYM_F_DCM_FX_CONTRA; persistent like a symptom, fx_contra)
+ *    therefore rules the flux rule out, whatever its supporting entries
+ *    score: at low speed and high current (R_A I_A > Psi w) a flux loss
+ *    moves r4 against r1, a speed-sensor offset with it, and the
+ *    estimates alone (Psi -, J/Psi + within their first memory after the
+ *    symptoms) would name the flux loss for the offset.
  *  - A fault with both a hard and a model rule (14, 15, 19, 20): FAILED if
  *    either fires; PASSED only if both tests ran and passed.
  *  - Hard-rule faults are PASSED while their condition is false (the flag
@@ -311,6 +322,8 @@ typedef struct {
   uint16_t fx_blind[CANFDI_SYM_N_RES]; /* DC motor: steps a residual's zero
                                         * stays no evidence against a flux
                                         * loss, <= sym_on_steps + 1000 */
+  canfdi_diagnosis_pers_t fx_contra; /* DC motor: a residual's sign rules out
+                                       * a flux loss (persistent) */
   uint32_t fx_gated; /* bit i: model rule i is flux-gated */
   uint8_t flux_rule; /* index of the flux rule (CANFDI_DIAG_N_RULES: none) */
   int8_t ref[CANFDI_DIAG_N_COMP][2]; /* operating-point signs of this step */

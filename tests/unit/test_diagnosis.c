@@ -579,6 +579,44 @@ START_TEST(test_lagging_residual)
 }
 END_TEST
 
+/* A residual whose sign no flux loss gives (CANFDI_SYM_F_DCM_FX_CONTRA,
+ * canfdi_app_sym: e.g. r4 with r1 where R_A I_A > Psi w) rules the flux
+ * rule out while it persists, even with the flux pattern's necessary
+ * entries all matched; once it has been gone for sym_off_steps the flux
+ * loss is isolated again. Steps of it shorter than sym_on_steps do not
+ * count. */
+START_TEST(test_flux_sign_contra)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 500U; k++) {
+    build(&s, &vecs[1] /* flux_down */, 0.3, 0.002);
+    if ((k % 10U) == 0U) {
+      s.flags |= CANFDI_SYM_F_DCM_FX_CONTRA; /* single steps: no persistence */
+    }
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_FLUX_DOWN);
+  setup();
+  for (k = 0U; k < 500U; k++) {
+    build(&s, &vecs[1], 0.3, 0.002);
+    s.flags |= CANFDI_SYM_F_DCM_FX_CONTRA;
+    canfdi_diagnosis_step(&dg, &s, rep);
+    ck_assert_msg(rep[CANFDI_FAULT_DCM_FLUX_DOWN] != CANFDI_DIAG_REPORT_FAILED, "flux at step %u", k);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, DCM, NULL), 0U);
+  for (k = 0U; k < 500U; k++) {
+    build(&s, &vecs[1], 0.3, 0.002);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    if (k < (uint32_t)cfg.sym_off_steps) {
+      ck_assert_msg(rep[CANFDI_FAULT_DCM_FLUX_DOWN] != CANFDI_DIAG_REPORT_FAILED, "flux at step %u", k);
+    }
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_FLUX_DOWN);
+}
+END_TEST
+
 /* A slow I_A offset ramp: r2/r3 cross their bands while r1 (-R dI) sits in
  * its hysteresis band [off, on). That r1 is not a confirmed zero, so the
  * friction rule (r1 Z) must not be isolated; once r1 crosses, I_A offset is.
@@ -740,6 +778,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_partial_pattern, 0, (int)N_PARTIAL);
   tcase_add_test(tc, test_confidence_monotone);
   tcase_add_test(tc, test_lagging_residual);
+  tcase_add_test(tc, test_flux_sign_contra);
   tcase_add_test(tc, test_band_is_not_zero);
   suite_add_tcase(s, tc);
   tc = tcase_create("false_alarms");
