@@ -231,6 +231,42 @@ static void dcm_rax(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   }
 }
 
+/* CANFDI_SYM_F_DCM_FX_CONTRA (canfdi_symptoms.h): a residual at or above
+ * the flux prediction's zero level with a sign no flux loss can give it.
+ * r1 = -dPsi w is not tracked: its sign is -sgn(w) (and a flux loss leaves
+ * it at 0 where w = 0). r4 = dPsi e4 / Psi minus its mean over the load
+ * tracking: a growing loss gives it the sign of e4 = R_A I_A - Psi w, and
+ * the tracking can add at most dPsi |e4_hp| / Psi of the other sign where
+ * e4 moves back through its tracked mean (e4_hp against e4), with dPsi at
+ * most max(|r1|, r1's threshold) / |w| (no bound at w = 0). r2 and r3
+ * (dPsi I_A, tracked) are not judged: the current follows the load and the
+ * accelerations, and no tracked mean of it is kept here. Scaling as in
+ * dcm_flux_pred (dPsi Q28 V s, saturating). */
+static bool dcm_flux_contra(const canfdi_app_sym_in_t *in, const canfdi_symptoms_t *s, int32_t e4, int32_t e4_hp)
+{
+  const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
+  const int32_t psi = in->est_dcm->cfg.psi_nom_q16;
+  const int32_t w = in->dcm_w_rad_s_q16;
+  bool c = false;
+  if ((pd != NULL) && in->dcm_in_ok && (psi > 0)) {
+    if (((s->dcm_rn_valid & 1U) != 0U) && (canfdi_q31_abs(pd->rn_q16[0]) >= CANFDI_APP_SYM_FX_EXPLAIN_RN) &&
+        (sgn_s32(pd->r_q16[0]) != -sgn_s32(w))) {
+      c = true;
+    }
+    if (((s->dcm_rn_valid & 8U) != 0U) && (canfdi_q31_abs(pd->rn_q16[3]) >= CANFDI_APP_SYM_FX_EXPLAIN_RN) &&
+        (w != 0) && (sgn_s32(pd->r_q16[3]) != sgn_s32(e4))) {
+      const int32_t sg4 = sgn_s32(e4);
+      const int32_t opp = (sg4 == 0) ? canfdi_q31_abs(e4_hp) : (((sg4 * sgn_s32(e4_hp)) < 0) ? canfdi_q31_abs(e4_hp) : 0);
+      const int32_t r1a = canfdi_q31_abs(pd->r_q16[0]);
+      const int32_t d_max =
+          canfdi_div_s32_qn((r1a > pd->thr_q16[0]) ? r1a : pd->thr_q16[0], canfdi_q31_abs(w), 28U);
+      const int32_t bound = canfdi_div_s32_qn(canfdi_mul_s32_qn(d_max, opp, 28U), psi, 16U);
+      c = c || (canfdi_q31_abs(pd->r_q16[3]) > bound);
+    }
+  }
+  return c;
+}
+
 /* The flux-loss prediction of the header (canfdi_symptoms.h dcm_fx_q16). */
 static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
@@ -282,7 +318,6 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
         any = true;
         if ((sens[j] == 0) || (sgn_s32(pd->r_q16[j]) != sg[j])) {
           ok = false; /* no flux loss gives this residual */
-          s->flags |= CANFDI_SYM_F_DCM_FX_CONTRA;
         } else if (j == 0U) {
           d_r1 = canfdi_div_s32_qn(canfdi_q31_abs(r1_hp), sens[0], 28U);
           d_tot = canfdi_div_s32_qn(canfdi_q31_abs(pd->r_q16[0]), sens[0], 28U);
@@ -292,6 +327,9 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
         }
       }
     }
+  }
+  if (dcm_flux_contra(in, s, e4, e4_hp)) {
+    s->flags |= CANFDI_SYM_F_DCM_FX_CONTRA;
   }
   if (ok && any) {
     const int32_t d_all = (d_r1 > d_mech) ? d_r1 : d_mech;

@@ -132,16 +132,17 @@
  *    symptoms appeared and a necessary parameter entry of the flux rule
  *    (Psi -, J/Psi +) is seen at zero or with the other sign.
  *  - A residual against a flux loss (DC motor). A flux loss dPsi moves
- *    each residual with a sign fixed by the operating point (r1 -dPsi w,
- *    r2 r3 +dPsi I_A, r4 dPsi (R_A I_A - Psi w) / Psi: canfdi_symptoms.h
- *    dcm_fx_q16); the load tracking pulls r2..r4 back towards zero but
- *    never past it. A residual at or above the zero level with the other
- *    sign (CANFDI_SYM_F_DCM_FX_CONTRA; persistent like a symptom, fx_contra)
- *    therefore rules the flux rule out, whatever its supporting entries
- *    score: at low speed and high current (R_A I_A > Psi w) a flux loss
- *    moves r4 against r1, a speed-sensor offset with it, and the
- *    estimates alone (Psi -, J/Psi + within their first memory after the
- *    symptoms) would name the flux loss for the offset.
+ *    r1 by -dPsi w (not tracked) and r4 by dPsi (R_A I_A - Psi w) / Psi
+ *    minus that term's mean over the load tracking; a residual at or above
+ *    the zero level with a sign no such loss can give it (r4: beyond what
+ *    the tracking can add where the operating point moves back through its
+ *    tracked mean; CANFDI_SYM_F_DCM_FX_CONTRA, app/canfdi_app_sym.c;
+ *    persistent like a symptom, fx_contra) rules the flux rule out,
+ *    whatever its supporting entries score. At low speed and high current
+ *    (R_A I_A > Psi w) a flux loss moves r4 against r1 and a speed-sensor
+ *    offset moves it with r1, while the estimates within their first
+ *    memory after the symptoms (Psi -, J/Psi +) would name the flux loss
+ *    for the offset.
  *  - A fault with both a hard and a model rule (14, 15, 19, 20): FAILED if
  *    either fires; PASSED only if both tests ran and passed.
  *  - Hard-rule faults are PASSED while their condition is false (the flag

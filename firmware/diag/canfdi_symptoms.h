@@ -63,9 +63,9 @@
 #define CANFDI_SYM_F_DCM_UA_CMD_VALID (1UL << 13) /* dcm_ua_cmd_rn_q16 valid */
 #define CANFDI_SYM_F_DCM_RAX_VALID (1UL << 14)    /* dcm_rax_q16 valid */
 #define CANFDI_SYM_F_DCM_FX_VALID (1UL << 15)     /* dcm_fx_q16 valid */
-#define CANFDI_SYM_F_DCM_FX_CONTRA (1UL << 16)    /* a DC-motor residual at or above
-                                                   * the zero level has a sign no
-                                                   * flux loss gives it (dcm_fx_q16) */
+#define CANFDI_SYM_F_DCM_FX_CONTRA (1UL << 16)    /* r1 or r4 at or above the zero
+                                                   * level with a sign no flux loss
+                                                   * can give it (app/canfdi_app_sym.c) */
 
 /* Estimator updates (dcm_upd / thr_upd): A = the equation of R_A and Psi
  * (DC motor: armature) or R and K (throttle: electrical); B = the equation
