@@ -383,6 +383,49 @@ START_TEST(test_fast)
 }
 END_TEST
 
+/* Direction pairing: a driver's 8 deg 0.5 Hz sine at 25 deg moves the valve
+ * one way for ~0.5 s at a time, with the turns (no updates) between; the
+ * means keep the other direction's window, so the solution stays valid
+ * through a closing window, but once its closing data are fast_pair_steps
+ * newer than the last opening update it is not paired. Opening windows
+ * pair it again. Paired implies valid at every step. */
+START_TEST(test_fast_pairing)
+{
+  canfdi_sim_refctl_cfg_t rc;
+  canfdi_est_thr_cfg_t ec;
+  long n_valid = 0;
+  long n_unpaired = 0;
+  canfdi_sim_default_cfg(&rig.cfg);
+  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS1] = 0.003;
+  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS2] = 0.003;
+  rig.cfg.sigma[CANFDI_SIM_S_THR_I] = 0.01;
+  rig.cfg.seed = 11U;
+  ck_assert_int_eq(canfdi_sim_init(&rig.sim, &rig.cfg), CANFDI_OK);
+  canfdi_sim_refctl_default(&rc, &rig.cfg);
+  canfdi_sim_refctl_init(&rig.ctl, &rc);
+  canfdi_sim_profile_init(&rig.angle, 0.0, 90.0);
+  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_CONST, 0, 0, 25.0, 0, 0), CANFDI_OK);
+  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_SINE, 0.5, 1e4, 8.0, 0.5, 0), CANFDI_OK);
+  canfdi_est_thr_default_cfg(&ec);
+  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &ec), CANFDI_OK);
+  rig.k = 0;
+  while (rig.k < 12000) {
+    bool v;
+    bool pr;
+    rig_step();
+    v = canfdi_est_thr_fast_valid(&rig.est);
+    pr = canfdi_est_thr_fast_paired(&rig.est);
+    CHECK(!pr || v);
+    n_valid += v ? 1 : 0;
+    n_unpaired += (v && !pr) ? 1 : 0;
+  }
+  SHOW("fast pairing (8 deg 0.5 Hz): valid %ld steps, of them not paired %ld\n", n_valid, n_unpaired);
+  CHECK(n_valid > 4000);
+  CHECK(n_unpaired > 100);            /* closing windows beyond fast_pair_steps */
+  CHECK(n_unpaired * 4 < n_valid * 3); /* opening windows pair it again */
+}
+END_TEST
+
 /* has_run is state (stepped since init, kept by reset), not a counter; the
  * diagnostics counters saturate at UINT32_MAX. */
 START_TEST(test_has_run_and_counters_saturate)
@@ -426,6 +469,7 @@ static Suite *make_suite(void)
   tc = tcase_create("fast_test");
   tcase_set_timeout(tc, 120);
   tcase_add_loop_test(tc, test_fast, 0, (int)(sizeof fast_cases / sizeof fast_cases[0]));
+  tcase_add_test(tc, test_fast_pairing);
   suite_add_tcase(s, tc);
   return s;
 }
