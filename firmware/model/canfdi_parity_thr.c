@@ -26,6 +26,11 @@ static int32_t pthr_abs(int32_t x)
   return canfdi_q31_abs(x);
 }
 
+static int64_t pthr_clamp64(int64_t x, int64_t lo, int64_t hi)
+{
+  return (x < lo) ? lo : ((x > hi) ? hi : x);
+}
+
 /* Q32 (int64) -> Q16.16, rounded half up, saturated. */
 static int32_t pthr_q32_to_q16(int64_t x)
 {
@@ -576,12 +581,20 @@ static void pthr_observe(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *i
   p->src = s->src;
   if ((src_prev == CANFDI_PARITY_THR_SRC_MEAN) && (s->src == CANFDI_PARITY_THR_SRC_NONE) && s->ok1 &&
       s->ok2) {
-    /* Coast entry: start from theta_arm, the jump-robust integral of the
-     * sensor increments (an abrupt offset is outvoted there, a drift moves
-     * it by half the drift, as the mean), not from the observer, whose
-     * error right after a fast stroke can be larger: it decays only with
-     * the position feedback that coasting gives up. */
-    th_p = p->th_arm_q32;
+    /* Coast entry: the observer's prediction, limited to what a fault of
+     * one sensor leaves possible. theta_arm lies between the true angle and
+     * the sensors' mean (an abrupt offset is outvoted there, an offset jump
+     * within jump_rad of the other sensor's noisy increment moves it by up
+     * to half the jump, a drift by half the drift), so the true angle is
+     * within half the sensors' disagreement of theta_arm. Inside that
+     * interval the observer is kept: it lags the mean and so still holds
+     * most of the angle from before the disagreement. Outside it, the
+     * observer carries its own model error (right after a fast stroke it
+     * can be several bands, decaying only with the position feedback that
+     * coasting gives up), and the nearest end of the interval is taken. */
+    const int64_t half_q32 = (int64_t)pthr_abs(canfdi_sub_s32_sat(s->th1, s->th2)) * 32768;
+    th_p = pthr_clamp64(th_p, canfdi_sub_s64_sat(p->th_arm_q32, half_q32),
+                        canfdi_add_s64_sat(p->th_arm_q32, half_q32));
   } else if ((s->src == CANFDI_PARITY_THR_SRC_NONE) && (s->ok1 || s->ok2) && !emf_ok) {
     /* Coasting without the back-EMF speed (current clipped in a fast
      * stroke, or bridge off): the mechanical model alone is poor there,

@@ -70,13 +70,19 @@
  *        NONE  coasting on the model and w_el alone, as soon as the
  *              correlation leaves its band: a disagreeing sensor must not
  *              drag the model towards itself (its half of the mean would).
- *              The coast starts from theta_arm (below), not from the
- *              observer: an abrupt offset is outvoted in theta_arm and a
- *              drift moves it only as it moves the mean, whereas the
- *              observer's own error just after a fast stroke (up to
- *              several bands after a 70-deg tip-out) would otherwise stay
- *              common to POS1 and POS2 for the whole coast, and the
- *              larger of them is then taken for the drifting sensor.
+ *              The coast starts from the observer, limited to within
+ *              half the sensors' disagreement of theta_arm (below), the
+ *              interval a fault of one sensor leaves for the true angle:
+ *              theta_arm lies between the truth and the mean (an abrupt
+ *              offset is outvoted there; one whose jump is within jump_rad
+ *              of the other sensor's noisy increment, or a drift, moves it
+ *              by up to half). Inside, the observer lags the mean and so
+ *              keeps most of the angle from before the disagreement (a
+ *              0.04 V TPS1 step whose jump was not outvoted was otherwise
+ *              taken for TPS2); outside, its own error just after a fast
+ *              stroke (up to several bands after a 70-deg tip-out) would
+ *              stay common to POS1 and POS2 for the whole coast, and the
+ *              larger of them be taken for the drifting sensor.
  *              While w_el is unavailable (current clipped in a fast stroke,
  *              bridge off) the coasting observer follows the jump-robust
  *              sensor increment instead of the mechanical model, which is

@@ -372,7 +372,8 @@ struct PthrRef {
     const unsigned src_prev = src;
     src = source(ok1, ok2, corr, rate);
     if (src_prev == CANFDI_PARITY_THR_SRC_MEAN && src == CANFDI_PARITY_THR_SRC_NONE && ok1 && ok2) {
-      thp = th_arm;
+      const double half = 0.5 * std::fabs(th1 - th2);
+      thp = clampd(thp, th_arm - half, th_arm + half);
     } else if (src == CANFDI_PARITY_THR_SRC_NONE && (ok1 || ok2) && !emf_ok) {
       thp = th_hat + inc;
     }
