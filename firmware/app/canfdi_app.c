@@ -306,6 +306,9 @@ static void stage_diagnose(canfdi_app_t *app)
   si.est_thr = &app->est_thr;
   si.dcm_est_on = app->dcm.est_on;
   si.dcm_est_restart = app->dcm.est_restart;
+  app->dcm.learnt = app->dcm.learnt ||
+                    (canfdi_est_dcm_arm_converged(&app->est_dcm) && canfdi_est_dcm_mech_converged(&app->est_dcm));
+  si.dcm_learnt = app->dcm.learnt;
   si.thr_est_on = app->thr.est_on;
   si.load_known_Nm_q16 = load_known_q16(app);
   si.load_nom_Nm_q16 = app->cal.load_nom_Nm_q16;

@@ -232,6 +232,11 @@ typedef struct {
   bool est_on;    /* the estimator was fed this step */
   bool est_restart; /* this step the estimator's covariance was boosted or
                      * reset: its memory starts again */
+  bool learnt;      /* DC motor: the armature and the mechanical estimates
+                     * have both converged once since power-up (a restart
+                     * that keeps the estimates keeps it); until then the
+                     * DC motor's model rules are not tested
+                     * (CANFDI_SYM_F_DCM_UNLEARNT) */
 } canfdi_app_gate_t;
 
 /*

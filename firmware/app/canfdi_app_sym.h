@@ -134,6 +134,7 @@ typedef struct {
   bool thr_est_on;                 /* the throttle estimator was fed this step */
   bool dcm_est_restart;            /* the DC-motor estimator's covariance was
                                     * boosted or reset this step */
+  bool dcm_learnt;                 /* canfdi_app_gate_t.learnt of the DC motor */
   int32_t load_known_Nm_q16;       /* the load the models assume this step */
   int32_t load_nom_Nm_q16;         /* the calibrated nominal load (in mc_nom) */
   int32_t dcm_w_rad_s_q16;         /* measured speed */

@@ -110,6 +110,19 @@
  *    For the throttle, a persistent CORR symptom that is not isolated sets
  *    corr_not_isolated: the application reports P2135 (dtcs.csv has it
  *    without a fault id).
+ *  - Learnt estimates (DC motor). While CANFDI_SYM_F_DCM_UNLEARNT is set
+ *    (the armature and the mechanical estimates have not both converged
+ *    since power-up, or since a replay's start mid-drive), no model rule of
+ *    the DC motor is tested: detected symptoms stay "detected, not
+ *    isolated" and a quiet component passes nothing. The rules read r1
+ *    against the estimated R_A and the parameter channels against
+ *    estimates that, before excitation has separated them, can put a flux
+ *    loss into the friction estimate: a replay cut 0.8 s before a ramped
+ *    flux loss at 20 rad/s named friction (P1A12), then, with a gate on the
+ *    armature estimate alone, an I_A offset (P1A20). A later restart that
+ *    keeps the estimates (an input timeout or a sensor fault healed) does
+ *    not clear it: a sensor fault whose symptom pauses the learning must
+ *    stay isolable.
  *  - The flux gate (DC motor). A developing flux loss moves the residuals
  *    in fixed ratios (canfdi_symptoms.h dcm_fx_q16), so early in a ramp
  *    one of them leaves its band alone: r1 at high speed and low current
@@ -335,6 +348,7 @@ typedef struct {
                                           * <= max(par_fresh_updates,
                                           * par_memory_updates) */
   uint8_t win_id[CANFDI_DIAG_N_COMP];
+  bool dcm_unlearnt; /* this step's CANFDI_SYM_F_DCM_UNLEARNT */
   bool corr_not_isolated;
   bool initialised;
   uint32_t failed_mask; /* bit i: fault i FAILED this step */

@@ -66,6 +66,11 @@
 #define CANFDI_SYM_F_DCM_FX_CONTRA (1UL << 16)    /* r1 or r4 at or above the zero
                                                    * level with a sign no flux loss
                                                    * can give it (app/canfdi_app_sym.c) */
+#define CANFDI_SYM_F_DCM_UNLEARNT (1UL << 17)     /* the armature and the mechanical
+                                                   * estimates have not both converged
+                                                   * since power-up: the DC motor's
+                                                   * model rules are not tested
+                                                   * (canfdi_diagnosis.h) */
 
 /* Estimator updates (dcm_upd / thr_upd): A = the equation of R_A and Psi
  * (DC motor: armature) or R and K (throttle: electrical); B = the equation

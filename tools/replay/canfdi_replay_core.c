@@ -241,6 +241,7 @@ enum {
   WHY_THR_CMD,
   WHY_THR_REF,
   WHY_THR_APART,
+  WHY_DCM_UNLEARNT,
   WHY_MODELS_DCM,
   WHY_MODELS_THR,
   N_WHY
@@ -259,6 +260,8 @@ static const char *const why_text[N_WHY] = {
     "the recorded ECU's position reference is not in the recording (its excitation phase is "
     "known only from its power-up)",
     "the recorded ECU drove the throttle otherwise than the replay (another position reference)",
+    "the DC motor's estimates (R_A, Psi, J, friction) have not converged since the start: too little "
+    "excitation in the recording so far",
     NULL, /* --no-models text */
     NULL};
 
@@ -722,6 +725,7 @@ static void monitor_whys(bool dcm_cmd_known, bool thr_cmd_known, bool power_up, 
                       : opt.no_models[0] ? WHY_MODELS_DCM
                       : !dcm_rx ? WHY_DCM_FRAME
                       : !dcm_in ? WHY_DCM_INPUTS
+                      : !a->dcm.learnt ? WHY_DCM_UNLEARNT
                                 : WHY_NONE;
   w[MON_DCM_CMD] = (w[MON_DCM_MODELS] != WHY_NONE) ? w[MON_DCM_MODELS] : (!dcm_cmd_known ? WHY_DCM_CMD : WHY_NONE);
   w[MON_THR_MODELS] = gap      ? WHY_GAP
