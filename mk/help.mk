@@ -35,6 +35,7 @@ Tests (`make test` runs those marked *)
   make firmware-guard     * the checks of `make firmware` on the Cortex-M images
   make pil-test           * PIL on QEMU (Cortex-M3, M4, M0): ECU frames bit for bit vs SIL, instructions per step
   make footprint          * flash/RAM per module and worst-case stack of the application image
+  make size-check         * every struct size a header or doc states ("sizeof(canfdi_x_t) = N") against the Cortex-M4/M0 builds
   make pil-cost           * the fuzz inputs on QEMU (M4, M0): no step over the stated worst case in instructions
   make firmware-guard-negative * the guard rejects injected defects (double, float, malloc, dead code)
   make dbc-check          * the committed generated codecs and tables match dbc/

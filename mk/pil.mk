@@ -158,3 +158,13 @@ footprint: $(foreach m,$(PIL_MACHINES),$(FP_DIR)/$(m)/canfdi_app.elf)
 	    --ci-dir $(FP_DIR)/$$m/obj --ld $$ld --ram-size $$ram --json $(BUILD)/bench/footprint.json; done
 
 TEST_STEPS += footprint
+
+# The struct sizes the headers and docs state ("sizeof(canfdi_x_t) = N"),
+# against the Cortex-M4 and M0 builds: a struct that grows fails here until
+# its statement follows (tests/pil/sizes.py).
+.PHONY: size-check
+size-check:
+	@python3 tests/pil/sizes.py --cc $(ARM_CC) --cflags "$(TGT_CFLAGS) -mfloat-abi=soft" \
+	  --core $(call pil_core,m4) --core $(call pil_core,m0)
+
+TEST_STEPS += size-check

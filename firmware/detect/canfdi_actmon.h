@@ -50,8 +50,9 @@
  *
  * Cost per canfdi_actmon_step: two filter updates (one 32x32->64 multiply
  * each), one saturating division when UAC is judged, ~20 compares; no loop.
- * Memory: sizeof(canfdi_actmon_t) = 72 bytes on a 32-bit target (config 32,
- * two filter states, the expected angle and its flag, diagnostics 20).
+ * Memory: sizeof(canfdi_actmon_t) = 68 bytes on a 32-bit target (the
+ * configuration copy, two filter states, the expected angle and its flag,
+ * the diagnostics).
  * Stack < 32 bytes. No heap.
  */
 #ifndef CANFDI_ACTMON_H

@@ -199,10 +199,10 @@
  * cycles; ~0.15 ms at 48 MHz for 7 k.) Code: 3.7 kB (M0+), 3.5 kB (M4),
  * ROM tables included. Stack (-fstack-usage, M0+): step 176 bytes plus a
  * 40-byte callee.
- * Memory: sizeof(canfdi_diagnosis_t) = 680 bytes on a 32-bit target
- * (configuration copy 92, reciprocals 68, channel and flag persistence 180,
- * normalised values 80, compiled rules 140, weights 40, results 16,
- * diagnostics 20, state). No heap, no globals besides const tables, no
+ * Memory: sizeof(canfdi_diagnosis_t) = 772 bytes on a 32-bit target (the
+ * configuration copy, the thresholds' reciprocals, the channel and flag
+ * persistence, the normalised values, the compiled rules, the weights, the
+ * results, the flux gate's counters, the diagnostics and the state). No heap, no globals besides const tables, no
  * floating point; reentrant per instance.
  */
 #ifndef CANFDI_DIAGNOSIS_H

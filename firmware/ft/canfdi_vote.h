@@ -85,9 +85,9 @@
  * min/mean/max incl. call overhead): Cortex-M0+ code 348 / 576 / 714,
  * Cortex-M4 194 / 330 / 422. Code: 1588 bytes (M0+). Stack: 104 bytes
  * (-fstack-usage, M0+) plus the debouncer's 16.
- * Memory: sizeof(canfdi_vote_t) = 140 bytes on a 32-bit target (config
- * copy 28, two debounce configs 28, three debouncers 48, diagnostics 28,
- * state). The instance holds pointers into itself (the debouncers'
+ * Memory: sizeof(canfdi_vote_t) = 156 bytes on a 32-bit target (the
+ * configuration copy, two debounce configurations, three debouncers, the
+ * diagnostics and the state). The instance holds pointers into itself (the debouncers'
  * configs): do not copy an instance after init. No heap, no globals.
  */
 #ifndef CANFDI_VOTE_H
