@@ -75,11 +75,12 @@ typedef struct {
 
 static rig_t rig;
 
-/* excitation over [0.5 s, t_exc_end) and again from t_exc2 on */
-static void rig_init(uint64_t seed, double t_exc_end, double t_exc2)
+/* The plant with the sensors' noise, its reference controller and an angle
+ * profile holding mean_deg (the caller adds its excitation); the estimator
+ * from its defaults (rig_est_start). */
+static void rig_plant_start(uint64_t seed, double mean_deg)
 {
   canfdi_sim_refctl_cfg_t rc;
-  canfdi_est_thr_cfg_t ec;
   canfdi_sim_default_cfg(&rig.cfg);
   rig.cfg.sigma[CANFDI_SIM_S_THR_TPS1] = 0.003;
   rig.cfg.sigma[CANFDI_SIM_S_THR_TPS2] = 0.003;
@@ -90,7 +91,21 @@ static void rig_init(uint64_t seed, double t_exc_end, double t_exc2)
   canfdi_sim_refctl_default(&rc, &rig.cfg);
   canfdi_sim_refctl_init(&rig.ctl, &rc);
   canfdi_sim_profile_init(&rig.angle, 0.0, 90.0);
-  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_CONST, 0, 0, 45.0, 0, 0), CANFDI_OK);
+  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_CONST, 0, 0, mean_deg, 0, 0), CANFDI_OK);
+}
+
+static void rig_est_start(void)
+{
+  canfdi_est_thr_cfg_t ec;
+  canfdi_est_thr_default_cfg(&ec);
+  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &ec), CANFDI_OK);
+  rig.k = 0;
+}
+
+/* excitation over [0.5 s, t_exc_end) and again from t_exc2 on */
+static void rig_init(uint64_t seed, double t_exc_end, double t_exc2)
+{
+  rig_plant_start(seed, 45.0);
   ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_SINE, 0.5, t_exc_end, 30.0, 0.5, 0), CANFDI_OK);
   ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_PRBS, 0.5, t_exc_end, 2.0, 0.05, 29U + (uint32_t)seed),
                    CANFDI_OK);
@@ -98,9 +113,7 @@ static void rig_init(uint64_t seed, double t_exc_end, double t_exc2)
     ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_SINE, t_exc2, 1e4, 30.0, 0.5, 0), CANFDI_OK);
     ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_PRBS, t_exc2, 1e4, 2.0, 0.05, 31U), CANFDI_OK);
   }
-  canfdi_est_thr_default_cfg(&ec);
-  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &ec), CANFDI_OK);
-  rig.k = 0;
+  rig_est_start();
 }
 
 static void rig_step(void)
@@ -313,24 +326,12 @@ static const fast_case_t fast_cases[] = {
 START_TEST(test_fast)
 {
   const fast_case_t *fc = &fast_cases[_i];
-  canfdi_sim_refctl_cfg_t rc;
-  canfdi_est_thr_cfg_t ec;
   stat_t ssp = {0, 0, 0};
   stat_t sfr = {0, 0, 0};
   double t_det = -1.0;
   long n_valid = 0;
   long n_after = 0;
-  canfdi_sim_default_cfg(&rig.cfg);
-  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS1] = 0.003;
-  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS2] = 0.003;
-  rig.cfg.sigma[CANFDI_SIM_S_THR_I] = 0.01;
-  rig.cfg.sigma[CANFDI_SIM_S_THR_SUPPLY] = 0.01;
-  rig.cfg.seed = 7U + (uint64_t)_i;
-  ck_assert_int_eq(canfdi_sim_init(&rig.sim, &rig.cfg), CANFDI_OK);
-  canfdi_sim_refctl_default(&rc, &rig.cfg);
-  canfdi_sim_refctl_init(&rig.ctl, &rc);
-  canfdi_sim_profile_init(&rig.angle, 0.0, 90.0);
-  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_CONST, 0, 0, 25.0, 0, 0), CANFDI_OK);
+  rig_plant_start(7U + (uint64_t)_i, 25.0);
   ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_SINE, 0.5, 1e4, 3.0, 2.0, 0), CANFDI_OK);
   if (fc->fault != NULL) {
     canfdi_sim_fault_spec_t fs;
@@ -340,9 +341,7 @@ START_TEST(test_fast)
                      CANFDI_OK);
     ck_assert_int_eq(canfdi_sim_add_fault(&rig.sim, &fs), CANFDI_OK);
   }
-  canfdi_est_thr_default_cfg(&ec);
-  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &ec), CANFDI_OK);
-  rig.k = 0;
+  rig_est_start();
   while (rig.k < 10000) {
     const double t = (double)(rig.k + 1) * 1e-3;
     double sp;
@@ -391,24 +390,11 @@ END_TEST
  * pair it again. Paired implies valid at every step. */
 START_TEST(test_fast_pairing)
 {
-  canfdi_sim_refctl_cfg_t rc;
-  canfdi_est_thr_cfg_t ec;
   long n_valid = 0;
   long n_unpaired = 0;
-  canfdi_sim_default_cfg(&rig.cfg);
-  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS1] = 0.003;
-  rig.cfg.sigma[CANFDI_SIM_S_THR_TPS2] = 0.003;
-  rig.cfg.sigma[CANFDI_SIM_S_THR_I] = 0.01;
-  rig.cfg.seed = 11U;
-  ck_assert_int_eq(canfdi_sim_init(&rig.sim, &rig.cfg), CANFDI_OK);
-  canfdi_sim_refctl_default(&rc, &rig.cfg);
-  canfdi_sim_refctl_init(&rig.ctl, &rc);
-  canfdi_sim_profile_init(&rig.angle, 0.0, 90.0);
-  ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_CONST, 0, 0, 25.0, 0, 0), CANFDI_OK);
+  rig_plant_start(11U, 25.0);
   ck_assert_int_eq(canfdi_sim_profile_add(&rig.angle, CANFDI_SIM_PROF_SINE, 0.5, 1e4, 8.0, 0.5, 0), CANFDI_OK);
-  canfdi_est_thr_default_cfg(&ec);
-  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &ec), CANFDI_OK);
-  rig.k = 0;
+  rig_est_start();
   while (rig.k < 12000) {
     bool v;
     bool pr;
