@@ -13,6 +13,7 @@
 /* Shorthands for the input supervision's verdicts of this step. */
 #define IN_VALID(app, i) canfdi_rx_valid(&(app)->rx, (unsigned)(i))
 #define IN_USABLE(app, i) canfdi_rx_usable(&(app)->rx, (unsigned)(i))
+#define IN_FRESH(app, i) canfdi_rx_fresh(&(app)->rx, (unsigned)(i))
 #define IN_VAL(app, i) canfdi_rx_value(&(app)->rx, (unsigned)(i))
 
 int32_t canfdi_app_rx_frame(canfdi_app_t *app, uint32_t id, const uint8_t *data, uint8_t dlc,
@@ -202,14 +203,24 @@ static void stage_control(canfdi_app_t *app, int32_t *u_dcm, int32_t *u_thr)
   *u_thr = canfdi_ctrl_thr_step(&app->ctrl_thr, &tin, NULL);
 }
 
-/* One plant's gate for this step: the parity equations run on VALID inputs
- * (restarting after a gap), the estimator learns only when fed (restarting
- * with a covariance reset, the estimate kept, once it has run). */
-static void gate(canfdi_app_gate_t *g, bool in_ok, bool est_on, bool running, bool est_has_run,
-                 bool *reset_parity, bool *reset_est)
+/* One plant's gate for this step: the parity equations run on fresh inputs
+ * (restarting after a gap, then re-arming), the estimator learns only when
+ * fed (restarting with a covariance reset, the estimate kept, once it has
+ * run). */
+static void gate(canfdi_app_gate_t *g, uint16_t rearm_steps, bool in_ok, bool est_on, bool running,
+                 bool est_has_run, bool *reset_parity, bool *reset_est)
 {
   *reset_parity = in_ok && !g->in_ok && running;
   *reset_est = est_on && !g->est_on && est_has_run;
+  /* back after an interruption (not the first start): the model rules are
+   * held while the restarted equations leave their transient */
+  if (*reset_parity && g->started) {
+    g->rearm = rearm_steps;
+  } else if (in_ok && (g->rearm > 0U)) {
+    g->rearm--;
+  } else {
+    /* holding, or interrupted (the rules' inputs are invalid anyway) */
+  }
   g->in_ok = in_ok;
   g->started = g->started || in_ok;
   g->est_on = est_on;
@@ -218,16 +229,20 @@ static void gate(canfdi_app_gate_t *g, bool in_ok, bool est_on, bool running, bo
 /* Stage 4a: which models run and learn this step (canfdi_app.h, feedback). */
 static void stage_gates(canfdi_app_t *app)
 {
-  const bool dcm_ok = IN_VALID(app, CANFDI_RX_IN_DCM_UA) && IN_VALID(app, CANFDI_RX_IN_DCM_IA) &&
-                      IN_VALID(app, CANFDI_RX_IN_DCM_OMEGA);
+  /* the models are discrete-time filters of a sample every step: a sample
+   * that is VALID but not fresh (its frame late, not yet timed out) is an
+   * interruption like a rejected one, not a repeated value (a held speed
+   * under acceleration reads as a shaft that stopped, then jumped) */
+  const bool dcm_ok = IN_FRESH(app, CANFDI_RX_IN_DCM_UA) && IN_FRESH(app, CANFDI_RX_IN_DCM_IA) &&
+                      IN_FRESH(app, CANFDI_RX_IN_DCM_OMEGA);
   /* the throttle's models need the voltage applied (canfdi_app_set_applied) */
-  const bool thr_ok = IN_VALID(app, CANFDI_RX_IN_THR_TPS1) && IN_VALID(app, CANFDI_RX_IN_THR_TPS2) &&
-                      IN_VALID(app, CANFDI_RX_IN_THR_IMOT) && IN_VALID(app, CANFDI_RX_IN_THR_USUPPLY) &&
+  const bool thr_ok = IN_FRESH(app, CANFDI_RX_IN_THR_TPS1) && IN_FRESH(app, CANFDI_RX_IN_THR_TPS2) &&
+                      IN_FRESH(app, CANFDI_RX_IN_THR_IMOT) && IN_FRESH(app, CANFDI_RX_IN_THR_USUPPLY) &&
                       thr_cmd_known(app);
   const bool thr_est = thr_ok && app->fb.mgr.thr.enable && app->vote_out.valid && !app->fb.thr_no_current;
   bool rp;
   bool re;
-  gate(&app->dcm, dcm_ok, dcm_ok && !app->fb.dcm_sensor_bad, app->running,
+  gate(&app->dcm, app->cal.rearm_steps, dcm_ok, dcm_ok && !app->fb.dcm_sensor_bad, app->running,
        canfdi_est_dcm_has_run(&app->est_dcm), &rp, &re);
   if (rp) {
     canfdi_parity_dcm_reset(&app->parity_dcm);
@@ -236,7 +251,8 @@ static void stage_gates(canfdi_app_t *app)
     canfdi_est_dcm_reset(&app->est_dcm, true);
     app->dcm.est_restart = true;
   }
-  gate(&app->thr, thr_ok, thr_est, app->running, canfdi_est_thr_has_run(&app->est_thr), &rp, &re);
+  gate(&app->thr, app->cal.rearm_steps, thr_ok, thr_est, app->running, canfdi_est_thr_has_run(&app->est_thr), &rp,
+       &re);
   if (rp) {
     canfdi_parity_thr_reset(&app->parity_thr);
   }
@@ -309,6 +325,8 @@ static void stage_diagnose(canfdi_app_t *app)
   app->dcm.learnt = app->dcm.learnt ||
                     (canfdi_est_dcm_arm_converged(&app->est_dcm) && canfdi_est_dcm_mech_converged(&app->est_dcm));
   si.dcm_learnt = app->dcm.learnt;
+  si.dcm_rearm = app->dcm.rearm > 0U;
+  si.thr_rearm = app->thr.rearm > 0U;
   si.thr_est_on = app->thr.est_on;
   si.load_known_Nm_q16 = load_known_q16(app);
   si.load_nom_Nm_q16 = app->cal.load_nom_Nm_q16;

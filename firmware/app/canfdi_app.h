@@ -66,7 +66,12 @@
  * symptom or a latched U_A offset) or its plant is not driven (throttle
  * de-energised, no valid position, no motor current). A fed-again
  * estimator restarts with a covariance reset and its parameter symptoms
- * stay invalid until it has re-converged.
+ * stay invalid until it has re-converged. A plant's inputs that come back
+ * from an interruption (a timeout, a rejected frame or sample: not VALID
+ * for a step) restart its parity equations, and its model rules are held
+ * for cal.rearm_steps from then on (the gate's rearm; the diagnosis'
+ * "Re-arming"): the plant may have moved meanwhile, and the residuals of
+ * the restarted equations need that long to leave a transient.
  *
  * Start-up: no drive is energised before its plant's inputs were valid once
  * (the sensor node may boot after this ECU, cal.rx.first_timeout_us); the
@@ -227,7 +232,7 @@ typedef struct {
 
 /* Which plant's models run and learn; state, not counters. */
 typedef struct {
-  bool in_ok;     /* the plant's inputs VALID this step: parity equations run */
+  bool in_ok;     /* the plant's inputs VALID and fresh this step: parity equations run */
   bool started;   /* in_ok was true once since power-up: the drive may be energised */
   bool est_on;    /* the estimator was fed this step */
   bool est_restart; /* this step the estimator's covariance was boosted or
@@ -237,6 +242,8 @@ typedef struct {
                      * that keeps the estimates keeps it); until then the
                      * DC motor's model rules are not tested
                      * (CANFDI_SYM_F_DCM_UNLEARNT) */
+  uint16_t rearm;   /* steps the model rules stay held after the inputs
+                     * came back (CANFDI_SYM_F_DCM_REARM / _THR_REARM) */
 } canfdi_app_gate_t;
 
 /*

@@ -421,6 +421,8 @@ static uint32_t flags(const canfdi_app_sym_in_t *in)
   f |= in->actmon->thr_no_current ? CANFDI_SYM_F_THR_NO_CURRENT : 0U;
   f |= in->actmon->dcm_uac_valid ? CANFDI_SYM_F_DCM_UA_CMD_VALID : 0U;
   f |= in->dcm_learnt ? 0U : CANFDI_SYM_F_DCM_UNLEARNT;
+  f |= in->dcm_rearm ? CANFDI_SYM_F_DCM_REARM : 0U;
+  f |= in->thr_rearm ? CANFDI_SYM_F_THR_REARM : 0U;
   return f;
 }
 

@@ -135,6 +135,8 @@ typedef struct {
   bool dcm_est_restart;            /* the DC-motor estimator's covariance was
                                     * boosted or reset this step */
   bool dcm_learnt;                 /* canfdi_app_gate_t.learnt of the DC motor */
+  bool dcm_rearm;                  /* canfdi_app_gate_t.rearm > 0, DC motor ... */
+  bool thr_rearm;                  /* ... and throttle */
   int32_t load_known_Nm_q16;       /* the load the models assume this step */
   int32_t load_nom_Nm_q16;         /* the calibrated nominal load (in mc_nom) */
   int32_t dcm_w_rad_s_q16;         /* measured speed */

@@ -160,7 +160,8 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
       d->fx_low[j] = 0U;
     }
     pers_clear(&d->fx_contra, CANFDI_DIAG_SYM_ZERO);
-    d->dcm_unlearnt = false;
+    d->held[CANFDI_DIAG_COMP_DCM] = false;
+    d->held[CANFDI_DIAG_COMP_THR] = false;
     d->corr_not_isolated = false;
     d->failed_mask = 0U;
   }
@@ -403,7 +404,8 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
     d->ref[CANFDI_DIAG_COMP_DCM][i] = s->dcm_ref[i];
     d->ref[CANFDI_DIAG_COMP_THR][i] = s->thr_ref[i];
   }
-  d->dcm_unlearnt = (s->flags & CANFDI_SYM_F_DCM_UNLEARNT) != 0U;
+  d->held[CANFDI_DIAG_COMP_DCM] = (s->flags & (CANFDI_SYM_F_DCM_UNLEARNT | CANFDI_SYM_F_DCM_REARM)) != 0U;
+  d->held[CANFDI_DIAG_COMP_THR] = (s->flags & CANFDI_SYM_F_THR_REARM) != 0U;
   count_fresh(d, CANFDI_DIAG_COMP_DCM, s->dcm_upd);
   count_fresh(d, CANFDI_DIAG_COMP_THR, s->thr_upd);
   for (i = 0U; i < CANFDI_SYM_N_RES; i++) {
@@ -724,17 +726,18 @@ static void component_hard(canfdi_diagnosis_t *d, uint32_t c, bool prev_hard, ve
   model_verdicts(c, V_NONE, 0U, v);
 }
 
-/* Nothing detected in component c: every testable model rule passes (the
- * DC motor's only once its armature and mechanical estimates have
- * converged: dcm_unlearnt, component_match). */
+/* Nothing detected in component c: every testable model rule passes,
+ * unless the component's models are held (held: the DC motor's estimates
+ * not yet converged, or either component re-arming after an input
+ * interruption; component_match). */
 static void component_quiet(canfdi_diagnosis_t *d, uint32_t c, verdicts_t *v)
 {
-  const bool unlearnt = (c == CANFDI_DIAG_COMP_DCM) && d->dcm_unlearnt;
+  const bool held = d->held[c];
   uint32_t i;
   clear_result(d, c, 0U, 0U);
   for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
     if (canfdi_diag_model_rules[i].comp == c) {
-      v->mv[canfdi_diag_model_rules[i].fault] = (!unlearnt && rule_testable(d, i)) ? V_PASS : V_NONE;
+      v->mv[canfdi_diag_model_rules[i].fault] = (!held && rule_testable(d, i)) ? V_PASS : V_NONE;
     }
   }
 }
@@ -748,9 +751,10 @@ static void component_match(canfdi_diagnosis_t *d, uint32_t c, uint8_t prev_isol
   rank(d, c);
   /* The DC motor's rules read the residuals against the estimated R_A and
    * the parameter channels against the estimates: until both have
-   * converged once (dcm_unlearnt, the header's "Learnt estimates") a
-   * residual pattern is detected but not isolated. */
-  if ((res->best != 0U) && !((c == CANFDI_DIAG_COMP_DCM) && d->dcm_unlearnt) &&
+   * converged once (the header's "Learnt estimates"), and for either
+   * component while it re-arms after an input interruption ("Re-arming"),
+   * a residual pattern is detected but not isolated (held). */
+  if ((res->best != 0U) && !d->held[c] &&
       (res->best_pct >= d->cfg.conf_min_pct) &&
       (((uint32_t)res->best_pct) >= ((uint32_t)res->second_pct + d->cfg.margin_pct))) {
     winner = res->best;

@@ -123,6 +123,17 @@
  *    keeps the estimates (an input timeout or a sensor fault healed) does
  *    not clear it: a sensor fault whose symptom pauses the learning must
  *    stay isolable.
+ *  - Re-arming (both components). While CANFDI_SYM_F_DCM_REARM or
+ *    _THR_REARM is set (the component's inputs came back from an
+ *    interruption less than the calibration's rearm time ago,
+ *    app/canfdi_app.h), its model rules are held the same way. The parity
+ *    equations restart on the first samples after the interruption: when
+ *    the plant moved meanwhile (a sensor node that restarted shows the
+ *    motor at rest where it ran, and the drive then accelerates it with
+ *    the bridge saturated), their filters start in the middle of a
+ *    transient and the residuals stay out of their bands for some 100 ms
+ *    after the restart's own settling; judged, their decay (r2 back in
+ *    band first, r1 last) read as a speed-sensor offset.
  *  - The flux gate (DC motor). A developing flux loss moves the residuals
  *    in fixed ratios (canfdi_symptoms.h dcm_fx_q16), so early in a ramp
  *    one of them leaves its band alone: r1 at high speed and low current
@@ -348,7 +359,9 @@ typedef struct {
                                           * <= max(par_fresh_updates,
                                           * par_memory_updates) */
   uint8_t win_id[CANFDI_DIAG_N_COMP];
-  bool dcm_unlearnt; /* this step's CANFDI_SYM_F_DCM_UNLEARNT */
+  bool held[CANFDI_DIAG_N_COMP]; /* this step the component's model rules are
+                                  * not tested: DC motor CANFDI_SYM_F_DCM_UNLEARNT
+                                  * or _DCM_REARM, throttle _THR_REARM */
   bool corr_not_isolated;
   bool initialised;
   uint32_t failed_mask; /* bit i: fault i FAILED this step */

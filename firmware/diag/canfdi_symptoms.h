@@ -71,6 +71,13 @@
                                                    * since power-up: the DC motor's
                                                    * model rules are not tested
                                                    * (canfdi_diagnosis.h) */
+#define CANFDI_SYM_F_DCM_REARM (1UL << 18)        /* the DC motor's inputs came back
+                                                   * from an interruption (a timeout,
+                                                   * a rejected frame or sample) less
+                                                   * than the calibration's rearm time
+                                                   * ago: its model rules are not
+                                                   * tested (canfdi_app.h, gates) */
+#define CANFDI_SYM_F_THR_REARM (1UL << 19)        /* the same for the throttle */
 
 /* Estimator updates (dcm_upd / thr_upd): A = the equation of R_A and Psi
  * (DC motor: armature) or R and K (throttle: electrical); B = the equation

@@ -53,6 +53,8 @@ static void (*before_step)(void);
 /* Given every setpoint frame of the rig before the ECU gets it when set:
  * may change it; false drops it (the vehicle's link, tampered with). */
 static bool (*sp_tamper)(canfdi_sim_frame_t *f);
+/* The same for the plant's sensor frames (DcmSensor, ThrSensor). */
+static bool (*sensor_tamper)(canfdi_sim_frame_t *f);
 
 static void loop_start(const char *text)
 {
@@ -65,6 +67,7 @@ static void loop_start(const char *text)
   ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
   before_step = NULL;
   sp_tamper = NULL;
+  sensor_tamper = NULL;
 }
 
 /* One lockstep step as the SIL rig runs it: the plant's and the vehicle's
@@ -80,7 +83,11 @@ static int32_t loop_step(canfdi_tx_frame_t *out)
   for (j = 0U; j < npf; j++) {
     const uint32_t id = pf[j].id;
     const bool sp = (id == CANFDI_SIL_MSG_SETPOINT_DCM_FRAME_ID) || (id == CANFDI_SIL_MSG_SETPOINT_THR_FRAME_ID);
+    const bool sensor = (id == CANFDI_SIL_MSG_DCM_SENSOR_FRAME_ID) || (id == CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID);
     if (sp && (sp_tamper != NULL) && !sp_tamper(&pf[j])) {
+      continue;
+    }
+    if (sensor && (sensor_tamper != NULL) && !sensor_tamper(&pf[j])) {
       continue;
     }
     if ((id == CANFDI_SIL_MSG_DCM_SENSOR_FRAME_ID) || (id == CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID) || sp) {
@@ -235,6 +242,70 @@ START_TEST(test_estimator_restart_independent_of_counters)
   }
   ck_assert(resumed);
   ck_assert_uint_gt(canfdi_est_dcm_diag(&app.est_dcm)->resets, resets_before);
+}
+END_TEST
+
+/* Which sensor frame drop_one() drops, once. */
+static uint32_t drop_id;
+
+static bool drop_one(canfdi_sim_frame_t *f)
+{
+  if (f->id == drop_id) {
+    drop_id = 0U;
+    return false;
+  }
+  return true;
+}
+
+/* One sensor frame lost (its counter then jumps by 2: accepted by design)
+ * while the drive accelerates: the input is VALID but not fresh in that
+ * step, so the plant's models do not run on the held sample; the next
+ * fresh sample restarts the parity equations and holds the plant's model
+ * rules (CANFDI_SYM_F_*_REARM) for exactly cal.rearm_steps steps from that
+ * step on, the other plant's untouched. No trouble code. */
+static void check_rearm_after_a_lost_frame(uint32_t id, const canfdi_app_gate_t *g, const canfdi_app_gate_t *other,
+                                           uint32_t flag, uint32_t other_flag, uint32_t (*resets)(void))
+{
+  canfdi_tx_frame_t out[CANFDI_APP_MAX_TX];
+  uint32_t r0;
+  uint32_t k;
+  loop_start("duration 100\nseed 4\nnoise dcm_ua 0.05\nnoise dcm_ia 0.02\nnoise dcm_speed 0.2\n"
+             "noise thr_tps1 0.003\nnoise thr_tps2 0.003\nnoise thr_i 0.01\n"
+             "load const 0.5\nspeed const 60\nspeed step 3 40\nangle const 20\nangle step 3 10\n");
+  loop_run(3003U);
+  ck_assert(g->in_ok && (g->rearm == 0U) && ((app.sym.flags & flag) == 0U));
+  r0 = resets();
+  sensor_tamper = drop_one;
+  drop_id = id;
+  (void)loop_step(out);
+  ck_assert_uint_eq(drop_id, 0U);
+  ck_assert(!g->in_ok);
+  ck_assert(other->in_ok);
+  ck_assert_uint_eq(resets(), r0);
+  (void)loop_step(out);
+  ck_assert(g->in_ok);
+  ck_assert_uint_eq(resets(), r0 + 1U);
+  for (k = 1U; k < cal.rearm_steps; k++) {
+    ck_assert_msg((app.sym.flags & flag) != 0U, "held %u steps only", k);
+    ck_assert((app.sym.flags & other_flag) == 0U);
+    (void)loop_step(out);
+  }
+  ck_assert((app.sym.flags & flag) != 0U);
+  (void)loop_step(out);
+  ck_assert_uint_eq(app.sym.flags & flag, 0U);
+  loop_run(1000U);
+  ck_assert_uint_eq(canfdi_dtc_count_by_mask(canfdi_app_dtc(&app), (uint8_t)CANFDI_DTC_ST_TF), 0U);
+}
+
+static uint32_t dcm_parity_resets(void) { return canfdi_parity_dcm_diag(&app.parity_dcm)->resets; }
+static uint32_t thr_parity_resets(void) { return canfdi_parity_thr_diag(&app.parity_thr)->resets; }
+
+START_TEST(test_models_rearm_after_a_lost_frame)
+{
+  check_rearm_after_a_lost_frame(CANFDI_SIL_MSG_DCM_SENSOR_FRAME_ID, &app.dcm, &app.thr, CANFDI_SYM_F_DCM_REARM,
+                                 CANFDI_SYM_F_THR_REARM, dcm_parity_resets);
+  check_rearm_after_a_lost_frame(CANFDI_SIL_MSG_THR_SENSOR_FRAME_ID, &app.thr, &app.dcm, CANFDI_SYM_F_THR_REARM,
+                                 CANFDI_SYM_F_DCM_REARM, thr_parity_resets);
 }
 END_TEST
 
@@ -597,6 +668,7 @@ static Suite *make_suite(void)
   tcase_set_timeout(tc, 120);
   tcase_add_test(tc, test_dtc_round_robin_past_2_32_steps);
   tcase_add_test(tc, test_estimator_restart_independent_of_counters);
+  tcase_add_test(tc, test_models_rearm_after_a_lost_frame);
   suite_add_tcase(s, tc);
   tc = tcase_create("startup");
   tcase_add_test(tc, test_startup_hold_off_is_what_the_manager_applied);

@@ -617,32 +617,69 @@ START_TEST(test_flux_sign_contra)
 }
 END_TEST
 
+/* A flag that holds the DC motor's model rules (`held`): a full flux-loss
+ * pattern with it is detected but not isolated and never FAILED; with
+ * `other` instead (0 or a flag of the throttle) the flux loss is isolated. */
+static void check_flux_held(uint32_t held, uint32_t other)
+{
+  const canfdi_diagnosis_result_t *r;
+  setup();
+  ck_assert_uint_eq(flux_steps(500U, held, 1U), 0U);
+  r = canfdi_diagnosis_result(&dg, DCM);
+  ck_assert(r != NULL && r->detected && r->not_isolated);
+  ck_assert_uint_gt(flux_steps(500U, other, 1U), 0U);
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_FLUX_DOWN);
+}
+
+/* 200 quiet steps with `flags`, then one with `then`: the verdicts of
+ * the DC motor's R_A rise and the throttle's motor R rise after each. */
+static void quiet_verdicts(uint32_t flags, uint32_t then, int32_t v[2][2])
+{
+  canfdi_symptoms_t s;
+  setup();
+  build(&s, &fault_free, 0.0, 0.0);
+  s.flags |= flags;
+  for (uint32_t k = 0U; k < 200U; k++) {
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  v[0][0] = (int32_t)rep[CANFDI_FAULT_DCM_RA_UP];
+  v[0][1] = (int32_t)rep[CANFDI_FAULT_THR_MOTOR_R_UP];
+  s.flags = (s.flags & ~flags) | then;
+  canfdi_diagnosis_step(&dg, &s, rep);
+  v[1][0] = (int32_t)rep[CANFDI_FAULT_DCM_RA_UP];
+  v[1][1] = (int32_t)rep[CANFDI_FAULT_THR_MOTOR_R_UP];
+}
+
 /* CANFDI_SYM_F_DCM_UNLEARNT (the DC motor's estimates not yet converged
  * once): a full flux-loss pattern is detected but not isolated and never
  * FAILED; a quiet DC motor passes none of its model faults (the throttle's
  * still pass). Once the flag is gone the flux loss is isolated. */
 START_TEST(test_unlearnt_tests_nothing)
 {
-  canfdi_symptoms_t s;
-  const canfdi_diagnosis_result_t *r;
-  setup();
-  ck_assert_uint_eq(flux_steps(500U, CANFDI_SYM_F_DCM_UNLEARNT, 1U), 0U);
-  r = canfdi_diagnosis_result(&dg, DCM);
-  ck_assert(r != NULL && r->detected && r->not_isolated);
-  ck_assert_uint_gt(flux_steps(500U, 0U, 1U), 0U);
-  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_FLUX_DOWN);
-  setup();
-  build(&s, &fault_free, 0.0, 0.0);
-  s.flags |= CANFDI_SYM_F_DCM_UNLEARNT;
-  for (uint32_t k = 0U; k < 200U; k++) {
-    canfdi_diagnosis_step(&dg, &s, rep);
-  }
-  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_RA_UP], CANFDI_DIAG_REPORT_NONE);
+  int32_t v[2][2];
+  check_flux_held(CANFDI_SYM_F_DCM_UNLEARNT, 0U);
+  quiet_verdicts(CANFDI_SYM_F_DCM_UNLEARNT, 0U, v);
+  ck_assert_int_eq(v[0][0], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_IA_SENSOR_OFFSET], CANFDI_DIAG_REPORT_PASSED);
+  ck_assert_int_eq(v[0][1], CANFDI_DIAG_REPORT_PASSED);
+  ck_assert_int_eq(v[1][0], CANFDI_DIAG_REPORT_PASSED);
+}
+END_TEST
+
+/* CANFDI_SYM_F_DCM_REARM / _THR_REARM (the component's inputs came back
+ * from an interruption less than the re-arm time ago) hold that
+ * component's model rules as the unlearnt flag does, and only that
+ * component's. */
+START_TEST(test_rearm_holds_one_component)
+{
+  int32_t v[2][2];
+  check_flux_held(CANFDI_SYM_F_DCM_REARM, CANFDI_SYM_F_THR_REARM);
+  quiet_verdicts(CANFDI_SYM_F_THR_REARM, CANFDI_SYM_F_DCM_REARM, v);
+  ck_assert_int_eq(v[0][1], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_int_eq(v[0][0], CANFDI_DIAG_REPORT_PASSED);
+  ck_assert_int_eq(v[1][1], CANFDI_DIAG_REPORT_PASSED);
+  ck_assert_int_eq(v[1][0], CANFDI_DIAG_REPORT_NONE);
   ck_assert_int_eq(rep[CANFDI_FAULT_DCM_IA_SENSOR_OFFSET], CANFDI_DIAG_REPORT_NONE);
-  ck_assert_int_eq(rep[CANFDI_FAULT_THR_MOTOR_R_UP], CANFDI_DIAG_REPORT_PASSED);
-  s.flags &= ~(uint32_t)CANFDI_SYM_F_DCM_UNLEARNT;
-  canfdi_diagnosis_step(&dg, &s, rep);
-  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_RA_UP], CANFDI_DIAG_REPORT_PASSED);
 }
 END_TEST
 
@@ -809,6 +846,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_lagging_residual);
   tcase_add_test(tc, test_flux_sign_contra);
   tcase_add_test(tc, test_unlearnt_tests_nothing);
+  tcase_add_test(tc, test_rearm_holds_one_component);
   tcase_add_test(tc, test_band_is_not_zero);
   suite_add_tcase(s, tc);
   tc = tcase_create("false_alarms");

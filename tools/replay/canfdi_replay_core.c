@@ -242,6 +242,8 @@ enum {
   WHY_THR_REF,
   WHY_THR_APART,
   WHY_DCM_UNLEARNT,
+  WHY_DCM_REARM,
+  WHY_THR_REARM,
   WHY_MODELS_DCM,
   WHY_MODELS_THR,
   N_WHY
@@ -262,6 +264,10 @@ static const char *const why_text[N_WHY] = {
     "the recorded ECU drove the throttle otherwise than the replay (another position reference)",
     "the DC motor's estimates (R_A, Psi, J, friction) have not converged since the start: too little "
     "excitation in the recording so far",
+    "re-arming: the DC-motor inputs came back from an interruption (rejected frames or values, a "
+    "timeout) less than the calibration's re-arm time ago",
+    "re-arming: the throttle inputs came back from an interruption (rejected frames or values, a "
+    "timeout) less than the calibration's re-arm time ago",
     NULL, /* --no-models text */
     NULL};
 
@@ -726,6 +732,7 @@ static void monitor_whys(bool dcm_cmd_known, bool thr_cmd_known, bool power_up, 
                       : !dcm_rx ? WHY_DCM_FRAME
                       : !dcm_in ? WHY_DCM_INPUTS
                       : !a->dcm.learnt ? WHY_DCM_UNLEARNT
+                      : (a->dcm.rearm > 0U) ? WHY_DCM_REARM
                                 : WHY_NONE;
   w[MON_DCM_CMD] = (w[MON_DCM_MODELS] != WHY_NONE) ? w[MON_DCM_MODELS] : (!dcm_cmd_known ? WHY_DCM_CMD : WHY_NONE);
   w[MON_THR_MODELS] = gap      ? WHY_GAP
@@ -734,6 +741,7 @@ static void monitor_whys(bool dcm_cmd_known, bool thr_cmd_known, bool power_up, 
                       : !thr_rx ? WHY_THR_FRAME
                       : !thr_in ? WHY_THR_INPUTS
                       : !thr_cmd_known ? WHY_THR_CMD
+                      : (a->thr.rearm > 0U) ? WHY_THR_REARM
                                        : WHY_NONE;
   w[MON_THR_TRACK] = (w[MON_THR_MODELS] != WHY_NONE) ? w[MON_THR_MODELS]
                      : !power_up                    ? WHY_THR_REF
