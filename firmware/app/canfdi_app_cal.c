@@ -119,6 +119,8 @@ void canfdi_app_default_cal(canfdi_app_cal_t *cal)
     canfdi_app_sym_default_cfg(&cal->sym);
     canfdi_actmgr_default_cfg(&cal->actmgr);
     canfdi_diagnosis_default_cfg(&cal->diagnosis);
+    /* RAX's "nothing to explain" waits for r1's symptom to clear */
+    cal->sym.rax_quiet_steps = cal->diagnosis.sym_off_steps;
     canfdi_dtcroute_default_cfg(&cal->dtcroute);
     /* the diagnosis every step until its throttle parameter isolation holds
      * at 10 ms (canfdi_app.h, the rate schedule) */

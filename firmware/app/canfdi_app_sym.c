@@ -20,6 +20,7 @@ void canfdi_app_sym_default_cfg(canfdi_app_sym_cfg_t *cfg)
     cfg->mech_settle_steps = 1000U;
     cfg->w_jump_rad_s_q16 = CANFDI_Q16_MILLI(2500);
     cfg->w_jump_hold_steps = 50U;
+    cfg->rax_quiet_steps = 50U; /* canfdi_diagnosis_default_cfg's sym_off_steps */
   }
 }
 
@@ -42,6 +43,7 @@ int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg
     m->e4_mean_q32 = 0;
     m->r1_est_q32 = 0;
     m->r1_est_w_q16 = 0;
+    m->r1_quiet = 0U;
     rc = CANFDI_OK;
   }
   return rc;
@@ -198,23 +200,34 @@ static void r1_est_mean(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, cons
 /* RAX (canfdi_symptoms.h): (R_A,est - R_A,model) I_A / r1_est / 0.5, with
  * r1_est the r1 the estimate was fit on (r1_est_mean), while |r1| is
  * RAX_MIN_RN times its threshold or more and r1_est is beyond the
- * threshold with r1's sign; 0 while r1 is in band (nothing to explain);
+ * threshold with r1's sign; 0 once r1 has been below the diagnosis' zero
+ * level for cfg.rax_quiet_steps (nothing to explain: r1's symptom is gone
+ * by then; before, it may still be held by the diagnosis' hysteresis and
+ * persistence, and a RAX zero next to it reads "the estimate does not
+ * explain r1": an R_A creep whose r1 hovered at its threshold was named a
+ * speed-sensor offset, tests/sil/scenarios/dcm_ra_creep_sine_speed.scn);
  * not valid otherwise (an incipient R_A rise first crosses the r1 band
  * while its estimate is still inside its spread: a "not explained" there
  * would name a speed offset);
  * valid while the armature estimate has converged and is fed. Scaling: the
  * model's R_A is Q24, taken to Q16.16; dR x I in Q16.16 V (rounded,
  * saturated); the quotient by r1_est in Q16.16 times 2. */
-static void dcm_rax(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+static void dcm_rax(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
   const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
   const canfdi_est_dcm_t *e = in->est_dcm;
   s->dcm_rax_q16 = 0;
+  if ((pd != NULL) && in->dcm_in_ok && ((pd->valid & 1U) != 0U) &&
+      (canfdi_q31_abs(pd->rn_q16[0]) < CANFDI_APP_SYM_ZERO_RN)) {
+    m->r1_quiet = (m->r1_quiet < m->cfg.rax_quiet_steps) ? (uint16_t)(m->r1_quiet + 1U) : m->r1_quiet;
+  } else {
+    m->r1_quiet = 0U;
+  }
   if ((pd != NULL) && in->dcm_in_ok && in->dcm_est_on && canfdi_est_dcm_arm_converged(e) &&
       ((pd->valid & 1U) != 0U) && (pd->thr_q16[0] > 0)) {
     const int32_t a = canfdi_q31_abs(pd->r_q16[0]);
     const int32_t r1e = canfdi_sat_s64_to_s32(canfdi_asr64_rnd(m->r1_est_q32, 16U));
-    if (a < pd->thr_q16[0]) {
+    if (m->r1_quiet >= m->cfg.rax_quiet_steps) {
       s->flags |= CANFDI_SYM_F_DCM_RAX_VALID; /* nothing to explain */
     } else if ((a >= canfdi_mul_s32_qn(pd->thr_q16[0], (int32_t)CANFDI_APP_SYM_RAX_MIN_RN * CANFDI_Q16_ONE, 16U)) &&
                (canfdi_q31_abs(r1e) >= pd->thr_q16[0]) && (sgn_s32(r1e) == sgn_s32(pd->r_q16[0]))) {
@@ -223,10 +236,33 @@ static void dcm_rax(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
       s->dcm_rax_q16 = canfdi_mul_s32_qn(canfdi_div_s32_qn(du, r1e, 16U), 2 * CANFDI_Q16_ONE, 16U);
       s->flags |= CANFDI_SYM_F_DCM_RAX_VALID;
     } else {
-      /* r1 beyond its band by less than RAX_MIN_RN bands, or the data the
+      /* r1 not yet quiet for rax_quiet_steps (its symptom may be held),
+       * r1 beyond its band by less than RAX_MIN_RN bands, or the data the
        * estimate was fit on not yet beyond it: an R_A change this small is
        * inside the estimate's own spread, so the estimate can neither
        * claim nor exclude it (not valid: '?') */
+    }
+  }
+}
+
+/* CANFDI_SYM_F_DCM_GAIN_CONTRA (the header, "Speed-gain magnitude").
+ * Scaling: the J/Psi deviation Q16.16 (relative, saturating difference);
+ * Psi (Q16.16 V s) x |x| -> Q16.16 V s, x |w| (Q16.16 rad/s) -> Q16.16 V,
+ * each product rounded and saturated; the comparisons in Q16.16 V with
+ * saturating doubling and quadrupling. */
+static void dcm_gain_contra(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+{
+  const canfdi_parity_dcm_out_t *pd = canfdi_parity_dcm_out(in->parity_dcm);
+  const uint8_t need = (uint8_t)((1U << CANFDI_SYM_DCM_P_J) | (1U << CANFDI_SYM_DCM_P_PSI));
+  if ((pd != NULL) && in->dcm_in_ok && ((pd->valid & 1U) != 0U) && ((s->dcm_pdev_valid & need) == need)) {
+    const int32_t x = canfdi_q31_abs(canfdi_sub_s32_sat(s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J],
+                                                        s->dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI]));
+    const int32_t pred = canfdi_mul_s32_qn(canfdi_mul_s32_qn(in->est_dcm->cfg.psi_nom_q16, x, 16U),
+                                           canfdi_q31_abs(in->dcm_w_rad_s_q16), 16U);
+    const int32_t r1 = canfdi_q31_abs(pd->r_q16[0]);
+    if ((pred >= canfdi_add_s32_sat(pd->thr_q16[0], pd->thr_q16[0])) &&
+        (canfdi_mul_s32_qn(r1, 4 * CANFDI_Q16_ONE, 16U) < pred)) {
+      s->flags |= CANFDI_SYM_F_DCM_GAIN_CONTRA;
     }
   }
 }
@@ -249,11 +285,11 @@ static bool dcm_flux_contra(const canfdi_app_sym_in_t *in, const canfdi_symptoms
   const int32_t w = in->dcm_w_rad_s_q16;
   bool c = false;
   if ((pd != NULL) && in->dcm_in_ok && (psi > 0)) {
-    if (((s->dcm_rn_valid & 1U) != 0U) && (canfdi_q31_abs(pd->rn_q16[0]) >= CANFDI_APP_SYM_FX_EXPLAIN_RN) &&
+    if (((s->dcm_rn_valid & 1U) != 0U) && (canfdi_q31_abs(pd->rn_q16[0]) >= CANFDI_APP_SYM_ZERO_RN) &&
         (sgn_s32(pd->r_q16[0]) != -sgn_s32(w))) {
       c = true;
     }
-    if (((s->dcm_rn_valid & 8U) != 0U) && (canfdi_q31_abs(pd->rn_q16[3]) >= CANFDI_APP_SYM_FX_EXPLAIN_RN) &&
+    if (((s->dcm_rn_valid & 8U) != 0U) && (canfdi_q31_abs(pd->rn_q16[3]) >= CANFDI_APP_SYM_ZERO_RN) &&
         (w != 0) && (sgn_s32(pd->r_q16[3]) != sgn_s32(e4))) {
       const int32_t sg4 = sgn_s32(e4);
       const int32_t opp = (sg4 == 0) ? canfdi_q31_abs(e4_hp) : (((sg4 * sgn_s32(e4_hp)) < 0) ? canfdi_q31_abs(e4_hp) : 0);
@@ -314,7 +350,7 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
     sg[2] = sg[1];
     sg[3] = sgn_s32(e4);
     for (j = 0U; ok && (j < CANFDI_SYM_N_RES); j++) {
-      if (((s->dcm_rn_valid & (1U << j)) != 0U) && (canfdi_q31_abs(pd->rn_q16[j]) >= CANFDI_APP_SYM_FX_EXPLAIN_RN)) {
+      if (((s->dcm_rn_valid & (1U << j)) != 0U) && (canfdi_q31_abs(pd->rn_q16[j]) >= CANFDI_APP_SYM_ZERO_RN)) {
         any = true;
         if ((sens[j] == 0) || (sgn_s32(pd->r_q16[j]) != sg[j])) {
           ok = false; /* no flux loss gives this residual */
@@ -439,6 +475,7 @@ void canfdi_app_sym_build(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   s->flags |= m->jump ? CANFDI_SYM_F_DCM_W_JUMP : 0U;
   r1_est_mean(m, in, s);
   dcm_rax(m, in, s);
+  dcm_gain_contra(in, s);
   dcm_flux_pred(m, in, s);
   s->dcm_ua_cmd_rn_q16 = uac_channel(in, s);
 }

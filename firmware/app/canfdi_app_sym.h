@@ -40,6 +40,17 @@
  * r1 stays out of its band (a sensor step leaves r1 out of band; a single
  * noisy sample does not).
  *
+ * Speed-gain magnitude (CANFDI_SYM_F_DCM_GAIN_CONTRA). A speed-sensor
+ * gain g moves J/Psi by about -g (J -9.3 %, Psi -4.8 % at +5 %) and puts
+ * r1 = -Psi g w into the armature equation: the J/Psi deviation x implies
+ * |r1| = Psi |x| |w| (Psi nominal). The flag is set while that prediction
+ * is at least 2 r1 thresholds and the measured |r1| is below a quarter of
+ * it (both from converged, fed estimates and a valid r1): a J/Psi that
+ * moved with no gain behind it, as the mechanical estimate's swing in a
+ * test burst after a covariance boost (+2.1 % with r1 just at its
+ * threshold during an R_A creep at 100 rad/s, where a gain of that size
+ * gives 9 thresholds). The diagnosis then rules the gain rule out.
+ *
  * Flux-loss prediction (canfdi_symptoms_t dcm_fx_q16, the physics there).
  * The smallest flux loss that explains the residuals beyond their
  * thresholds is dPsi = max_j |r_j| / s_j over those residuals, with the
@@ -91,11 +102,12 @@
  * neither claim nor exclude R_A. */
 #define CANFDI_APP_SYM_RAX_MIN_RN 3
 
-/* The flux-loss prediction explains the residuals at or above this share
- * of their thresholds (Q16.16, 0.8): the diagnosis' zero level (off,
- * canfdi_diagnosis.h), below which a residual counts as a zero; above it
- * a residual is not a zero, so a flux loss must account for it. */
-#define CANFDI_APP_SYM_FX_EXPLAIN_RN 52429
+/* The diagnosis' zero level (off, canfdi_diagnosis.h) as a share of a
+ * residual's threshold (Q16.16, 0.8): below it a residual counts as a
+ * zero; at or above it a residual is not a zero, so the flux-loss
+ * prediction must account for it, and RAX has something to explain (a
+ * residual in [off, on) keeps its symptom: the hysteresis). */
+#define CANFDI_APP_SYM_ZERO_RN 52429
 
 typedef struct {
   int32_t dcm_w_on_rad_s_q16;   /* > 0: |w| at which the speed's sign counts */
@@ -105,6 +117,10 @@ typedef struct {
   uint16_t mech_settle_steps;   /* mechanical estimates invalid after a speed sign change */
   int32_t w_jump_rad_s_q16;     /* > 0: implausible speed step per sample */
   uint16_t w_jump_hold_steps;   /* the jump flag held at least this long */
+  uint16_t rax_quiet_steps;     /* r1 below the zero level this long before
+                                 * RAX reads "nothing to explain" (the
+                                 * diagnosis' sym_off_steps: until then r1's
+                                 * symptom may still be held) */
 } canfdi_app_sym_cfg_t;
 
 typedef struct {
@@ -121,6 +137,8 @@ typedef struct {
   int64_t r1_est_q32;           /* r1 weighted as the armature estimate weights its
                                  * data (V, Q32; RAX) */
   int32_t r1_est_w_q16;         /* the sum of those weights, Q16.16 (<= 1 / forget) */
+  uint16_t r1_quiet;            /* steps r1 has been below the zero level
+                                 * (saturating at cfg.rax_quiet_steps) */
 } canfdi_app_sym_t;
 
 typedef struct {

@@ -160,6 +160,7 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
       d->fx_low[j] = 0U;
     }
     pers_clear(&d->fx_contra, CANFDI_DIAG_SYM_ZERO);
+    pers_clear(&d->gain_contra, CANFDI_DIAG_SYM_ZERO);
     d->held[CANFDI_DIAG_COMP_DCM] = false;
     d->held[CANFDI_DIAG_COMP_THR] = false;
     d->corr_not_isolated = false;
@@ -218,6 +219,19 @@ static void compile_rule(const canfdi_diag_model_rule_t *r, canfdi_diagnosis_rul
  * it from a flux loss, whatever the residuals' zeros say. *flux: the flux
  * rule's index (CANFDI_DIAG_N_RULES if there is none).
  */
+/* The index of fault's model rule, CANFDI_DIAG_N_RULES if it has none. */
+static uint8_t rule_of(uint8_t fault)
+{
+  uint32_t i;
+  uint8_t idx = (uint8_t)CANFDI_DIAG_N_RULES;
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    if (canfdi_diag_model_rules[i].fault == fault) {
+      idx = (uint8_t)i;
+    }
+  }
+  return idx;
+}
+
 static uint32_t flux_gated_rules(const canfdi_diagnosis_rule_t rule[], uint8_t *flux)
 {
   uint32_t fz = 0U;
@@ -285,6 +299,7 @@ int32_t canfdi_diagnosis_init(canfdi_diagnosis_t *d, const canfdi_diagnosis_cfg_
         compile_rule(&canfdi_diag_model_rules[i], &d->rule[i]);
       }
       d->fx_gated = flux_gated_rules(d->rule, &d->flux_rule);
+      d->gain_rule = rule_of(CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN);
       d->diag = (canfdi_diagnosis_diag_t){0};
       d->initialised = true;
       canfdi_diagnosis_reset(d);
@@ -454,6 +469,9 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
   pers_step(&d->fx_contra, true,
             ((s->flags & CANFDI_SYM_F_DCM_FX_CONTRA) != 0U) ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO,
             d->cfg.sym_on_steps, d->cfg.sym_off_steps);
+  pers_step(&d->gain_contra, true,
+            ((s->flags & CANFDI_SYM_F_DCM_GAIN_CONTRA) != 0U) ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO,
+            d->cfg.sym_on_steps, d->cfg.sym_off_steps);
   channel(d, CANFDI_DIAG_COMP_THR, 8U, 0, false);
   channel(d, CANFDI_DIAG_COMP_THR, 9U, 0, false);
   for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
@@ -612,8 +630,10 @@ static void rank(canfdi_diagnosis_t *d, uint32_t c)
       uint32_t pct = 0U;
       uint32_t p2 = 0U;
       /* a residual whose sign no flux loss gives rules the flux rule out,
-       * whatever its pattern's supporting entries score */
-      const bool ruled_out = (i == (uint32_t)d->flux_rule) && (d->fx_contra.state == CANFDI_DIAG_SYM_POS);
+       * whatever its pattern's supporting entries score; an r1 too small
+       * for the gain J/Psi implies rules the speed-gain rule out */
+      const bool ruled_out = ((i == (uint32_t)d->flux_rule) && (d->fx_contra.state == CANFDI_DIAG_SYM_POS)) ||
+                             ((i == (uint32_t)d->gain_rule) && (d->gain_contra.state == CANFDI_DIAG_SYM_POS));
       bool cand = !ruled_out && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_POS, &rr, zero, &pct);
       if (!ruled_out && (r->bipolar != 0U) && eval_rule(d, &d->rule[i], CANFDI_DIAG_SYM_NEG, &rr, zero, &p2)) {
         if (!cand || (p2 > pct)) {

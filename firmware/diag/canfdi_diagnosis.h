@@ -167,6 +167,14 @@
  *    offset moves it with r1, while the estimates within their first
  *    memory after the symptoms (Psi -, J/Psi +) would name the flux loss
  *    for the offset.
+ *  - An r1 too small for a speed gain (DC motor). A speed-sensor gain
+ *    moves J/Psi by about its own size and r1 by Psi g w; while r1 is
+ *    below a quarter of what the gain J/Psi implies would give
+ *    (CANFDI_SYM_F_DCM_GAIN_CONTRA, app/canfdi_app_sym.h; persistent like
+ *    a symptom) the speed-gain rule is ruled out, whatever its entries
+ *    score: the mechanical estimate can swing J/Psi past its 2 % threshold
+ *    in a test burst by itself, and next to an r1 held at its threshold
+ *    by a slow R_A creep that pattern read as a gain.
  *  - A fault with both a hard and a model rule (14, 15, 19, 20): FAILED if
  *    either fires; PASSED only if both tests ran and passed.
  *  - Hard-rule faults are PASSED while their condition is false (the flag
@@ -210,7 +218,7 @@
  * cycles; ~0.15 ms at 48 MHz for 7 k.) Code: 3.7 kB (M0+), 3.5 kB (M4),
  * ROM tables included. Stack (-fstack-usage, M0+): step 176 bytes plus a
  * 40-byte callee.
- * Memory: sizeof(canfdi_diagnosis_t) = 772 bytes on a 32-bit target (the
+ * Memory: sizeof(canfdi_diagnosis_t) = 776 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag
  * persistence, the normalised values, the compiled rules, the weights, the
  * results, the flux gate's counters, the diagnostics and the state). No heap, no globals besides const tables, no
@@ -349,8 +357,11 @@ typedef struct {
                                         * loss, <= sym_on_steps + 1000 */
   canfdi_diagnosis_pers_t fx_contra; /* DC motor: a residual's sign rules out
                                        * a flux loss (persistent) */
+  canfdi_diagnosis_pers_t gain_contra; /* DC motor: r1 too small for the speed
+                                        * gain J/Psi implies (persistent) */
   uint32_t fx_gated; /* bit i: model rule i is flux-gated */
   uint8_t flux_rule; /* index of the flux rule (CANFDI_DIAG_N_RULES: none) */
+  uint8_t gain_rule; /* index of the speed-gain rule (likewise) */
   int8_t ref[CANFDI_DIAG_N_COMP][2]; /* operating-point signs of this step */
   uint16_t win_n[CANFDI_DIAG_N_COMP]; /* consecutive wins of res.best */
   bool latched[CANFDI_DIAG_N_COMP];   /* res.isolated came from the model rules */

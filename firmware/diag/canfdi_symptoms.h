@@ -78,6 +78,10 @@
                                                    * ago: its model rules are not
                                                    * tested (canfdi_app.h, gates) */
 #define CANFDI_SYM_F_THR_REARM (1UL << 19)        /* the same for the throttle */
+#define CANFDI_SYM_F_DCM_GAIN_CONTRA (1UL << 20)  /* r1 is below a quarter of what the
+                                                   * speed-sensor gain that J/Psi
+                                                   * implies would give it
+                                                   * (app/canfdi_app_sym.h) */
 
 /* Estimator updates (dcm_upd / thr_upd): A = the equation of R_A and Psi
  * (DC motor: armature) or R and K (throttle: electrical); B = the equation
@@ -120,8 +124,8 @@ typedef struct {
    * moves the estimate by what r1 showed over that memory (share ~1, also
    * while R_A ramps and the estimate lags r1 itself by its memory); a
    * sensor offset or a flux change leaves R_A alone (share ~0): at one
-   * operating point r1 alone cannot tell them apart. 0 while r1 is in its
-   * band (nothing to explain). Valid (CANFDI_SYM_F_DCM_RAX_VALID) while the
+   * operating point r1 alone cannot tell them apart. 0 while r1 is below
+   * the diagnosis' zero level (nothing to explain). Valid (CANFDI_SYM_F_DCM_RAX_VALID) while the
    * armature estimator has converged and is fed. */
   int32_t dcm_rax_q16;
   /* Flux-loss prediction: per residual, the normalised value (1.0 = its

@@ -617,6 +617,34 @@ START_TEST(test_flux_sign_contra)
 }
 END_TEST
 
+/* CANFDI_SYM_F_DCM_GAIN_CONTRA (r1 too small for the speed-sensor gain
+ * J/Psi implies, app/canfdi_app_sym.h) rules the speed-gain rule out while
+ * it persists: the gain's full pattern is then never FAILED as a gain;
+ * single steps of the flag do not count; without it the gain is isolated. */
+START_TEST(test_gain_contra_rules_gain_out)
+{
+  canfdi_symptoms_t s;
+  uint32_t gain_failed = 0U;
+  uint32_t k;
+  setup();
+  for (k = 0U; k < 500U; k++) {
+    build(&s, &vecs[4] /* speed_gain */, 0.3, 0.002);
+    s.flags |= CANFDI_SYM_F_DCM_GAIN_CONTRA;
+    canfdi_diagnosis_step(&dg, &s, rep);
+    gain_failed += (rep[CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN] == CANFDI_DIAG_REPORT_FAILED) ? 1U : 0U;
+  }
+  ck_assert_uint_eq(gain_failed, 0U);
+  ck_assert_uint_ne(canfdi_diagnosis_isolated(&dg, DCM, NULL), CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN);
+  setup();
+  for (k = 0U; k < 500U; k++) {
+    build(&s, &vecs[4], 0.3, 0.002);
+    s.flags |= ((k % 10U) == 0U) ? CANFDI_SYM_F_DCM_GAIN_CONTRA : 0U;
+    canfdi_diagnosis_step(&dg, &s, rep);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN);
+}
+END_TEST
+
 /* A flag that holds the DC motor's model rules (`held`): a full flux-loss
  * pattern with it is detected but not isolated and never FAILED; with
  * `other` instead (0 or a flag of the throttle) the flux loss is isolated. */
@@ -847,6 +875,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_flux_sign_contra);
   tcase_add_test(tc, test_unlearnt_tests_nothing);
   tcase_add_test(tc, test_rearm_holds_one_component);
+  tcase_add_test(tc, test_gain_contra_rules_gain_out);
   tcase_add_test(tc, test_band_is_not_zero);
   suite_add_tcase(s, tc);
   tc = tcase_create("false_alarms");

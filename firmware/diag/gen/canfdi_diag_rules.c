@@ -7,7 +7,7 @@ const canfdi_diag_model_rule_t canfdi_diag_model_rules[CANFDI_DIAG_N_RULES] = {
   {CANFDI_FAULT_DCM_FLUX_DOWN, CANFDI_DIAG_COMP_DCM, 0U, "N++- 0N0. P0", "abba .... .."}, /* r1 Psi and J/Psi necessary; r2..r4 only support (load tracking pulls them back within seconds) */
   {CANFDI_FAULT_DCM_FRICTION_UP, CANFDI_DIAG_COMP_DCM, 0U, "ZPP+ 00.+ .0", ".aaa .... .."}, /* r2 r3 up with a clear zero r1 (the armature equation is untouched by friction) */
   {CANFDI_FAULT_DCM_IA_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "NPPZ .... 00", ".... .... .."}, /* r4 (no I_A) stays zero; r1 r2 r3 see the offset */
-  {CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN, CANFDI_DIAG_COMP_DCM, 1U, "N.Z- 0-0. N0", "a..a .... .."}, /* r1 and J/Psi necessary: a real gain unbalances the armature equation */
+  {CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN, CANFDI_DIAG_COMP_DCM, 1U, "N.Z- 0-0. N0", "a..a .... .."}, /* r1 and J/Psi necessary: a real gain unbalances the armature equation (and by about what J/Psi implies: CANFDI_SYM_F_DCM_GAIN_CONTRA rules the rule out otherwise) */
   {CANFDI_FAULT_DCM_SPEED_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "NZZ- 0.Z. 0Z", ".... .... .."}, /* r1 necessary and constant in sign (not following the speed); RAX zero: the R_A estimate does not explain r1; UAC zero tells it from a U_A offset; J/Psi only supports (an abrupt offset kicks it) */
   {CANFDI_FAULT_DCM_UA_SENSOR_OFFSET, CANFDI_DIAG_COMP_DCM, 1U, "+Z0+ 0+0. 0P", ".... .a.. .."}, /* UAC (measured U_A against the command) necessary */
   {CANFDI_FAULT_THR_TPS1_DRIFT, CANFDI_DIAG_COMP_THR, 1U, "PZPZ .... ..", ".... .... .."}, /* CORR and POS1 necessary; POS2 zero */
