@@ -203,19 +203,25 @@ static void stage_control(canfdi_app_t *app, int32_t *u_dcm, int32_t *u_thr)
   *u_thr = canfdi_ctrl_thr_step(&app->ctrl_thr, &tin, NULL);
 }
 
-/* One plant's gate for this step: the parity equations run on fresh inputs
- * (restarting after a gap, then re-arming), the estimator learns only when
- * fed (restarting with a covariance reset, the estimate kept, once it has
- * run). */
-static void gate(canfdi_app_gate_t *g, uint16_t rearm_steps, bool in_ok, bool est_on, bool running,
-                 bool est_has_run, bool *reset_parity, bool *reset_est)
+/* One plant's gate for this step: the parity equations run on VALID inputs
+ * (restarting after an interruption, then re-arming), the estimator learns
+ * only when fed (restarting with a covariance reset, the estimate kept,
+ * once it has run). A VALID sample that is not fresh (its frame late, not
+ * timed out) interrupts nothing but holds the model rules for
+ * cal->late_hold_steps (canfdi_app.h, feedback). */
+static void gate(canfdi_app_gate_t *g, const canfdi_app_cal_t *cal, bool in_ok, bool fresh, bool est_on,
+                 bool running, bool est_has_run, bool *reset_parity, bool *reset_est)
 {
   *reset_parity = in_ok && !g->in_ok && running;
   *reset_est = est_on && !g->est_on && est_has_run;
-  /* back after an interruption (not the first start): the model rules are
-   * held while the restarted equations leave their transient */
   if (*reset_parity && g->started) {
-    g->rearm = rearm_steps;
+    /* back after an interruption (not the first start): held while the
+     * restarted equations leave their transient */
+    g->rearm = cal->rearm_steps;
+  } else if (in_ok && !fresh) {
+    /* the models step on the last sample again: held while the filters
+     * carry that distortion */
+    g->rearm = (g->rearm > cal->late_hold_steps) ? g->rearm : cal->late_hold_steps;
   } else if (in_ok && (g->rearm > 0U)) {
     g->rearm--;
   } else {
@@ -229,30 +235,31 @@ static void gate(canfdi_app_gate_t *g, uint16_t rearm_steps, bool in_ok, bool es
 /* Stage 4a: which models run and learn this step (canfdi_app.h, feedback). */
 static void stage_gates(canfdi_app_t *app)
 {
-  /* the models are discrete-time filters of a sample every step: a sample
-   * that is VALID but not fresh (its frame late, not yet timed out) is an
-   * interruption like a rejected one, not a repeated value (a held speed
-   * under acceleration reads as a shaft that stopped, then jumped) */
-  const bool dcm_ok = IN_FRESH(app, CANFDI_RX_IN_DCM_UA) && IN_FRESH(app, CANFDI_RX_IN_DCM_IA) &&
-                      IN_FRESH(app, CANFDI_RX_IN_DCM_OMEGA);
+  const bool dcm_ok = IN_VALID(app, CANFDI_RX_IN_DCM_UA) && IN_VALID(app, CANFDI_RX_IN_DCM_IA) &&
+                      IN_VALID(app, CANFDI_RX_IN_DCM_OMEGA);
+  /* one frame carries the three (and the throttle's four): one freshness */
+  const bool dcm_fresh = IN_FRESH(app, CANFDI_RX_IN_DCM_OMEGA);
   /* the throttle's models need the voltage applied (canfdi_app_set_applied) */
-  const bool thr_ok = IN_FRESH(app, CANFDI_RX_IN_THR_TPS1) && IN_FRESH(app, CANFDI_RX_IN_THR_TPS2) &&
-                      IN_FRESH(app, CANFDI_RX_IN_THR_IMOT) && IN_FRESH(app, CANFDI_RX_IN_THR_USUPPLY) &&
+  const bool thr_ok = IN_VALID(app, CANFDI_RX_IN_THR_TPS1) && IN_VALID(app, CANFDI_RX_IN_THR_TPS2) &&
+                      IN_VALID(app, CANFDI_RX_IN_THR_IMOT) && IN_VALID(app, CANFDI_RX_IN_THR_USUPPLY) &&
                       thr_cmd_known(app);
+  const bool thr_fresh = IN_FRESH(app, CANFDI_RX_IN_THR_TPS1);
   const bool thr_est = thr_ok && app->fb.mgr.thr.enable && app->vote_out.valid && !app->fb.thr_no_current;
   bool rp;
   bool re;
-  gate(&app->dcm, app->cal.rearm_steps, dcm_ok, dcm_ok && !app->fb.dcm_sensor_bad, app->running,
+  gate(&app->dcm, &app->cal, dcm_ok, dcm_fresh, dcm_ok && !app->fb.dcm_sensor_bad, app->running,
        canfdi_est_dcm_has_run(&app->est_dcm), &rp, &re);
+  app->dcm.fresh = dcm_ok && dcm_fresh;
   if (rp) {
-    canfdi_parity_dcm_reset(&app->parity_dcm);
+    canfdi_parity_dcm_restart(&app->parity_dcm);
   }
   if (re) {
     canfdi_est_dcm_reset(&app->est_dcm, true);
     app->dcm.est_restart = true;
   }
-  gate(&app->thr, app->cal.rearm_steps, thr_ok, thr_est, app->running, canfdi_est_thr_has_run(&app->est_thr), &rp,
+  gate(&app->thr, &app->cal, thr_ok, thr_fresh, thr_est, app->running, canfdi_est_thr_has_run(&app->est_thr), &rp,
        &re);
+  app->thr.fresh = thr_ok && thr_fresh;
   if (rp) {
     canfdi_parity_thr_reset(&app->parity_thr);
   }
@@ -317,6 +324,7 @@ static void stage_diagnose(canfdi_app_t *app)
   si.parity_dcm = &app->parity_dcm;
   si.parity_thr = &app->parity_thr;
   si.dcm_in_ok = app->dcm.in_ok;
+  si.dcm_fresh = app->dcm.fresh;
   si.thr_in_ok = app->thr.in_ok;
   si.est_dcm = &app->est_dcm;
   si.est_thr = &app->est_thr;

@@ -71,7 +71,12 @@
  * for a step) restart its parity equations, and its model rules are held
  * for cal.rearm_steps from then on (the gate's rearm; the diagnosis'
  * "Re-arming"): the plant may have moved meanwhile, and the residuals of
- * the restarted equations need that long to leave a transient.
+ * the restarted equations need that long to leave a transient. A sample
+ * that is VALID but not fresh (its frame late, within the timeout)
+ * restarts nothing: the models step on the last sample again, which under
+ * acceleration reads as a shaft that stopped and then jumped, so the
+ * speed-step check compares only consecutive fresh samples and the model
+ * rules are held for cal.late_hold_steps.
  *
  * Start-up: no drive is energised before its plant's inputs were valid once
  * (the sensor node may boot after this ECU, cal.rx.first_timeout_us); the
@@ -232,7 +237,8 @@ typedef struct {
 
 /* Which plant's models run and learn; state, not counters. */
 typedef struct {
-  bool in_ok;     /* the plant's inputs VALID and fresh this step: parity equations run */
+  bool in_ok;     /* the plant's inputs VALID this step: parity equations run */
+  bool fresh;     /* ... and a new sample of them arrived since the last step */
   bool started;   /* in_ok was true once since power-up: the drive may be energised */
   bool est_on;    /* the estimator was fed this step */
   bool est_restart; /* this step the estimator's covariance was boosted or
@@ -243,7 +249,8 @@ typedef struct {
                      * DC motor's model rules are not tested
                      * (CANFDI_SYM_F_DCM_UNLEARNT) */
   uint16_t rearm;   /* steps the model rules stay held after the inputs
-                     * came back (CANFDI_SYM_F_DCM_REARM / _THR_REARM) */
+                     * came back or a sample was late
+                     * (CANFDI_SYM_F_DCM_REARM / _THR_REARM) */
 } canfdi_app_gate_t;
 
 /*

@@ -64,9 +64,12 @@ static void cal_models(canfdi_app_cal_t *cal)
    * the bridge saturated and the restarted DC-motor residuals stay out of
    * band for about 0.16 s (the parity's 60 settle steps included); a
    * fault-free start from rest into a 60 rad/s step, for 0.2 s. 0.5 s is
-   * the DC-motor estimator's memory, and the isolation of a fault present
-   * across the interruption waits that long at most. */
+   * the DC-motor estimator's memory. A late sample, stepped on again,
+   * disturbs the parity equations' filters for the tail of their SVF
+   * (113 steps to 1e-3, above) and the residuals' persistence (20 steps)
+   * after it: 150 ms. */
   cal->rearm_steps = 500U;
+  cal->late_hold_steps = 150U;
 }
 
 static void cal_position_sensors(canfdi_app_cal_t *cal)

@@ -66,7 +66,8 @@ typedef struct {
   canfdi_uds_cfg_t uds;            /* the diagnostic server (limp-home angle from ctrl_thr) */
   uint16_t rearm_steps;            /* a plant's model rules held this many 1 ms
                                     * steps after its inputs came back from an
-                                    * interruption (canfdi_app.h, feedback) */
+                                    * interruption (canfdi_app.h, feedback) ... */
+  uint16_t late_hold_steps;        /* ... and this many after a late sample */
   int32_t load_nom_Nm_q16;         /* load the models assume while the vehicle's
                                     * load feed-forward (SetpointDcm.SpDcmLoad) is
                                     * lost, rejected or not yet received */

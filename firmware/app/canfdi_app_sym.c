@@ -97,7 +97,7 @@ static void references(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfd
 static void speed_jump(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, const canfdi_symptoms_t *s)
 {
   const canfdi_est_dcm_cfg_t *c = &in->est_dcm->cfg;
-  const bool ok = in->dcm_in_ok;
+  const bool ok = in->dcm_in_ok && in->dcm_fresh;
   bool jump_now = false;
   if (ok && m->w_prev_ok && (c->j_nom_q24 > 0)) {
     const int32_t mf0 = canfdi_sub_s32_sat(c->mc_nom_q16, in->load_nom_Nm_q16);

@@ -29,7 +29,9 @@
  * the rotor.
  *
  * Speed-step plausibility (CANFDI_SYM_F_DCM_W_JUMP). Between two valid
- * samples the shaft's speed can only change by what the drive's torque
+ * fresh samples of consecutive steps (a late frame's step repeats the last
+ * sample, and the next one carries two steps' change) the shaft's speed
+ * can only change by what the drive's torque
  * gives: dw = (Psi I_A - M_F0 sgn(w) - M_L) T / J with the nominal Psi,
  * J and Coulomb friction (the estimator's configuration) and the known
  * load. A measured step that differs from it by more than
@@ -145,6 +147,7 @@ typedef struct {
   const canfdi_parity_dcm_t *parity_dcm;
   const canfdi_parity_thr_t *parity_thr;
   bool dcm_in_ok;                  /* the DC-motor parity equations ran on valid inputs */
+  bool dcm_fresh;                  /* ... and a new sample of them arrived */
   bool thr_in_ok;                  /* the throttle parity equations ran on valid inputs */
   const canfdi_est_dcm_t *est_dcm;
   const canfdi_est_thr_t *est_thr;

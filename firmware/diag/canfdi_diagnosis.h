@@ -125,8 +125,9 @@
  *    stay isolable.
  *  - Re-arming (both components). While CANFDI_SYM_F_DCM_REARM or
  *    _THR_REARM is set (the component's inputs came back from an
- *    interruption less than the calibration's rearm time ago,
- *    app/canfdi_app.h), its model rules are held the same way. The parity
+ *    interruption, or one of its samples was late, less than the
+ *    calibration's hold time ago, app/canfdi_app.h), its model rules are
+ *    held the same way. The parity
  *    equations restart on the first samples after the interruption: when
  *    the plant moved meanwhile (a sensor node that restarted shows the
  *    motor at rest where it ran, and the drive then accelerates it with

@@ -73,10 +73,12 @@
                                                    * (canfdi_diagnosis.h) */
 #define CANFDI_SYM_F_DCM_REARM (1UL << 18)        /* the DC motor's inputs came back
                                                    * from an interruption (a timeout,
-                                                   * a rejected frame or sample) less
-                                                   * than the calibration's rearm time
-                                                   * ago: its model rules are not
-                                                   * tested (canfdi_app.h, gates) */
+                                                   * a rejected frame or sample) or
+                                                   * a sample of theirs was late less
+                                                   * than the calibration's rearm_steps
+                                                   * / late_hold_steps ago: its model
+                                                   * rules are not tested
+                                                   * (canfdi_app.h, feedback) */
 #define CANFDI_SYM_F_THR_REARM (1UL << 19)        /* the same for the throttle */
 #define CANFDI_SYM_F_DCM_GAIN_CONTRA (1UL << 20)  /* r1 is below a quarter of what the
                                                    * speed-sensor gain that J/Psi
@@ -124,8 +126,9 @@ typedef struct {
    * moves the estimate by what r1 showed over that memory (share ~1, also
    * while R_A ramps and the estimate lags r1 itself by its memory); a
    * sensor offset or a flux change leaves R_A alone (share ~0): at one
-   * operating point r1 alone cannot tell them apart. 0 while r1 is below
-   * the diagnosis' zero level (nothing to explain). Valid (CANFDI_SYM_F_DCM_RAX_VALID) while the
+   * operating point r1 alone cannot tell them apart. 0 once r1 has been
+   * below the diagnosis' zero level for rax_quiet_steps (nothing to
+   * explain, app/canfdi_app_sym.c). Valid (CANFDI_SYM_F_DCM_RAX_VALID) while the
    * armature estimator has converged and is fed. */
   int32_t dcm_rax_q16;
   /* Flux-loss prediction: per residual, the normalised value (1.0 = its

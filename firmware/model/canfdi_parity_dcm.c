@@ -326,6 +326,15 @@ void canfdi_parity_dcm_reset(canfdi_parity_dcm_t *p)
   }
 }
 
+void canfdi_parity_dcm_restart(canfdi_parity_dcm_t *p)
+{
+  if ((p != NULL) && (p->cfg != NULL)) {
+    const uint16_t left = p->ra_learn_left;
+    canfdi_parity_dcm_reset(p);
+    p->ra_learn_left = (left == 0U) ? 0U : p->ra_learn_left;
+  }
+}
+
 int32_t canfdi_parity_dcm_set_ra(canfdi_parity_dcm_t *p, int32_t ra_ohm_q24)
 {
   int32_t out = -CANFDI_EINVAL;

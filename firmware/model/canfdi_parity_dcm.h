@@ -457,6 +457,13 @@ int32_t canfdi_parity_dcm_init(canfdi_parity_dcm_t *p, const canfdi_parity_dcm_c
  * a gap in the data (lost frames) or a drive restart. No-op on NULL. */
 void canfdi_parity_dcm_reset(canfdi_parity_dcm_t *p);
 
+/* The same restart without starting R_A's fast learning again once it has
+ * finished: after a short interruption mid-drive the estimate kept is the
+ * history that separates warm-up from a fault, and re-learning without the
+ * gate would absorb a fault present across it into R_A (an I_A offset's
+ * -R_A dI in r1, leaving the pattern of friction). No-op on NULL. */
+void canfdi_parity_dcm_restart(canfdi_parity_dcm_t *p);
+
 /* Sets the R_A estimate (e.g. from non-volatile memory), clamped to
  * [ra_min, ra_max] when tracking. CANFDI_OK or -CANFDI_EINVAL (NULL,
  * uninitialised, R outside 0.001..100 Ohm). Cost: 3 long divisions. */

@@ -616,8 +616,31 @@ START_TEST(reset_restarts_settling_keeps_ra)
     ck_assert_uint_eq(canfdi_parity_dcm_out(&g_p)->valid, 0U);
     ck_assert_uint_eq(canfdi_parity_dcm_diag(&g_p)->resets, 1U);
     ck_assert_int_eq(canfdi_parity_dcm_out(&g_p)->ra_hat_ohm_q24, ra_before);
+    /* after a reset R_A is learnt again: r1/r4 wait past the settling */
+    for (k = 1U; k <= 2U * g_cfg.settle_steps; k++) {
+      o = canfdi_parity_dcm_step(&g_p, &in);
+    }
+    ck_assert_uint_eq(o->valid, 0x06U);
+    /* a restart during that learning restarts it; once it has finished, a
+     * restart keeps it finished: r1/r4 valid again right after settling */
+    canfdi_parity_dcm_restart(&g_p);
+    for (k = 1U; k <= 2U * g_cfg.settle_steps; k++) {
+      o = canfdi_parity_dcm_step(&g_p, &in);
+    }
+    ck_assert_uint_eq(o->valid, 0x06U);
+    for (k = 0U; k < ((unsigned)g_cfg.ra_learn_blocks + 1U) * g_cfg.ra_block_steps; k++) {
+      o = canfdi_parity_dcm_step(&g_p, &in);
+    }
+    ck_assert_uint_eq(o->valid, 0x0FU);
+    canfdi_parity_dcm_restart(&g_p);
+    ck_assert_uint_eq(canfdi_parity_dcm_diag(&g_p)->resets, 3U);
+    for (k = 1U; k <= g_cfg.settle_steps; k++) {
+      o = canfdi_parity_dcm_step(&g_p, &in);
+    }
+    ck_assert_uint_eq(o->valid, 0x0FU);
   }
   canfdi_parity_dcm_reset(NULL);
+  canfdi_parity_dcm_restart(NULL);
 }
 END_TEST
 

@@ -265,9 +265,9 @@ static const char *const why_text[N_WHY] = {
     "the DC motor's estimates (R_A, Psi, J, friction) have not converged since the start: too little "
     "excitation in the recording so far",
     "re-arming: the DC-motor inputs came back from an interruption (rejected frames or values, a "
-    "timeout) less than the calibration's re-arm time ago",
+    "timeout) or a DcmSensor frame was late, less than the calibration's hold time ago",
     "re-arming: the throttle inputs came back from an interruption (rejected frames or values, a "
-    "timeout) less than the calibration's re-arm time ago",
+    "timeout) or a ThrSensor frame was late, less than the calibration's hold time ago",
     NULL, /* --no-models text */
     NULL};
 
