@@ -14,6 +14,7 @@
 #define IN_VALID(app, i) canfdi_rx_valid(&(app)->rx, (unsigned)(i))
 #define IN_USABLE(app, i) canfdi_rx_usable(&(app)->rx, (unsigned)(i))
 #define IN_FRESH(app, i) canfdi_rx_fresh(&(app)->rx, (unsigned)(i))
+#define IN_SAMPLES(app, i) canfdi_rx_samples(&(app)->rx, (unsigned)(i))
 #define IN_VAL(app, i) canfdi_rx_value(&(app)->rx, (unsigned)(i))
 
 int32_t canfdi_app_rx_frame(canfdi_app_t *app, uint32_t id, const uint8_t *data, uint8_t dlc,
@@ -237,13 +238,15 @@ static void stage_gates(canfdi_app_t *app)
 {
   const bool dcm_ok = IN_VALID(app, CANFDI_RX_IN_DCM_UA) && IN_VALID(app, CANFDI_RX_IN_DCM_IA) &&
                       IN_VALID(app, CANFDI_RX_IN_DCM_OMEGA);
-  /* one frame carries the three (and the throttle's four): one freshness */
-  const bool dcm_fresh = IN_FRESH(app, CANFDI_RX_IN_DCM_OMEGA);
+  /* one frame carries the three (and the throttle's four): one freshness;
+   * exactly one new sample (two: a frame came early, the models would see
+   * two steps' change in one) */
+  const bool dcm_fresh = IN_FRESH(app, CANFDI_RX_IN_DCM_OMEGA) && (IN_SAMPLES(app, CANFDI_RX_IN_DCM_OMEGA) == 1U);
   /* the throttle's models need the voltage applied (canfdi_app_set_applied) */
   const bool thr_ok = IN_VALID(app, CANFDI_RX_IN_THR_TPS1) && IN_VALID(app, CANFDI_RX_IN_THR_TPS2) &&
                       IN_VALID(app, CANFDI_RX_IN_THR_IMOT) && IN_VALID(app, CANFDI_RX_IN_THR_USUPPLY) &&
                       thr_cmd_known(app);
-  const bool thr_fresh = IN_FRESH(app, CANFDI_RX_IN_THR_TPS1);
+  const bool thr_fresh = IN_FRESH(app, CANFDI_RX_IN_THR_TPS1) && (IN_SAMPLES(app, CANFDI_RX_IN_THR_TPS1) == 1U);
   const bool thr_est = thr_ok && app->fb.mgr.thr.enable && app->vote_out.valid && !app->fb.thr_no_current;
   bool rp;
   bool re;

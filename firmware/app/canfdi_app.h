@@ -72,11 +72,13 @@
  * for cal.rearm_steps from then on (the gate's rearm; the diagnosis'
  * "Re-arming"): the plant may have moved meanwhile, and the residuals of
  * the restarted equations need that long to leave a transient. A sample
- * that is VALID but not fresh (its frame late, within the timeout)
- * restarts nothing: the models step on the last sample again, which under
- * acceleration reads as a shaft that stopped and then jumped, so the
- * speed-step check compares only consecutive fresh samples and the model
- * rules are held for cal.late_hold_steps.
+ * that is VALID but not fresh (its frame late, within the timeout), or
+ * that came with another in one step (a frame early: the models see two
+ * steps' change in one), restarts nothing: the models step on the last
+ * sample, which under acceleration reads as a shaft that stopped and then
+ * jumped, so the speed-step check compares only consecutive steps with
+ * one new sample each and the model rules are held for
+ * cal.late_hold_steps.
  *
  * Start-up: no drive is energised before its plant's inputs were valid once
  * (the sensor node may boot after this ECU, cal.rx.first_timeout_us); the

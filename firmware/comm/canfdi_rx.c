@@ -149,6 +149,7 @@ static void signal_accept(canfdi_rx_t *rx, unsigned i, int32_t value_q16, uint32
   s->has_value = true;
   s->stale = false;
   s->fresh = true;
+  s->samples = (s->samples < UINT8_MAX) ? (uint8_t)(s->samples + 1U) : s->samples;
   if (s->in_error) {
     if (s->good_run < UINT8_MAX) {
       s->good_run++;
@@ -357,10 +358,12 @@ int canfdi_rx_init(canfdi_rx_t *rx, const canfdi_rx_cfg_t *cfg, uint32_t now_us)
         s->in_error = false;
         s->stale = false;
         s->fresh = false;
+        s->samples = 0U;
         rx->estimate_q16[i] = 0;
         rx->in[i].value_q16 = cfg->default_q16[i];
         rx->in[i].quality = (uint8_t)CANFDI_RX_INVALID;
         rx->in[i].fresh = false;
+        rx->in[i].samples = 0U;
       }
       rx->estimate_mask = 0U;
       rx->acc.prefailed = 0U;
@@ -456,10 +459,12 @@ static void decide(canfdi_rx_t *rx, unsigned i, uint32_t now_us)
     s->stale = true;
   }
   in->fresh = false;
+  in->samples = 0U;
   if (s->has_value && !s->in_error && !s->stale && !rx->frame[f].timed_out) {
     in->quality = (uint8_t)CANFDI_RX_VALID;
     in->value_q16 = s->last_q16;
     in->fresh = s->fresh;
+    in->samples = s->samples;
   } else if ((rx->estimate_mask & (UINT32_C(1) << i)) != 0U) {
     in->quality = (uint8_t)CANFDI_RX_SUBSTITUTED;
     in->value_q16 = rx->estimate_q16[i];
@@ -479,6 +484,7 @@ static void decide(canfdi_rx_t *rx, unsigned i, uint32_t now_us)
     /* VALID */
   }
   s->fresh = false;
+  s->samples = 0U;
 }
 
 int canfdi_rx_step(canfdi_rx_t *rx, uint32_t now_us)

@@ -73,7 +73,9 @@
  * Quality of each input, decided per step:
  *   VALID        the last accepted value, no error since (or recovered),
  *                frame not timed out. `fresh` says a new sample arrived since
- *                the previous step (a 1 ms input is VALID but not fresh for
+ *                the previous step, `samples` how many (2 or more when a
+ *                frame came early; the value is the last one's) (a 1 ms
+ *                input is VALID but not fresh for
  *                the steps in which its frame is late but not timed out).
  *   SUBSTITUTED  the input is in error (a rejected frame or signal, a
  *                timeout, or still recovering) and a stand-in is available:
@@ -205,6 +207,9 @@ typedef struct {
   int32_t value_q16; /* never data of a rejected frame (see the header) */
   uint8_t quality;   /* canfdi_rx_quality_t */
   bool fresh;        /* VALID and a new sample arrived since the last step */
+  uint8_t samples;   /* VALID: samples accepted since the last step (saturating;
+                      * more than 1: a frame came early, the one before it is
+                      * lost to this input); else 0 */
 } canfdi_rx_input_t;
 
 /* Monitors; 0..9 in the order of catalogue faults 22..31. */
@@ -294,6 +299,7 @@ typedef struct {
   bool in_error;       /* set by an error, cleared after recover_frames samples */
   bool stale;          /* last sample older than the timeout window (latched) */
   bool fresh;          /* accepted since the last step */
+  uint8_t samples;     /* accepted since the last step (saturating) */
 } canfdi_rx_signal_state_t;
 
 /* Instance, caller-owned (static). Read the inputs through
@@ -363,6 +369,7 @@ int canfdi_rx_step(canfdi_rx_t *rx, uint32_t now_us);
  *   canfdi_rx_valid    VALID (a measured, accepted, recent value)
  *   canfdi_rx_usable   VALID or SUBSTITUTED (a value fit for control)
  *   canfdi_rx_fresh    VALID and a new sample arrived since the last step
+ *   canfdi_rx_samples  VALID: how many (2 or more: a frame came early)
  *   canfdi_rx_value    the value (defined for every quality, see above)
  * i must be < CANFDI_RX_IN_COUNT (asserted); before the first step every
  * input is INVALID with its default value. Cost: O(1), inline.
@@ -383,6 +390,12 @@ static inline bool canfdi_rx_fresh(const canfdi_rx_t *rx, unsigned i)
 {
   CANFDI_ASSERT((rx != NULL) && (i < (unsigned)CANFDI_RX_IN_COUNT));
   return rx->in[i].fresh;
+}
+
+static inline uint8_t canfdi_rx_samples(const canfdi_rx_t *rx, unsigned i)
+{
+  CANFDI_ASSERT((rx != NULL) && (i < (unsigned)CANFDI_RX_IN_COUNT));
+  return rx->in[i].samples;
 }
 
 static inline int32_t canfdi_rx_value(const canfdi_rx_t *rx, unsigned i)

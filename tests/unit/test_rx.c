@@ -344,6 +344,42 @@ START_TEST(healthy_stream_is_valid_and_passes)
 }
 END_TEST
 
+/* canfdi_rx_samples: 1 for the frame of each cycle; 0 (and not fresh,
+ * still VALID) in a cycle whose frame is late; 2 in a cycle that received
+ * two (a frame early), the value the later one's; 0 while not VALID. */
+START_TEST(samples_count_the_frames_of_a_step)
+{
+  uint8_t d[8];
+  uint16_t raw[8];
+  setup_cfg(NULL);
+  memcpy(raw, nominal_raw, sizeof raw);
+  for (unsigned k = 0U; k < 20U; k++) {
+    cycle(true, true, false, nominal_raw);
+    ck_assert_uint_eq(canfdi_rx_samples(&rx, CANFDI_RX_IN_DCM_OMEGA), 1U);
+  }
+  cycle(false, true, false, nominal_raw);
+  ck_assert_uint_eq(rx.in[CANFDI_RX_IN_DCM_OMEGA].quality, CANFDI_RX_VALID);
+  ck_assert(!canfdi_rx_fresh(&rx, CANFDI_RX_IN_DCM_OMEGA));
+  ck_assert_uint_eq(canfdi_rx_samples(&rx, CANFDI_RX_IN_DCM_OMEGA), 0U);
+  ck_assert_uint_eq(canfdi_rx_samples(&rx, CANFDI_RX_IN_THR_TPS1), 1U);
+  make_dcm(d, nominal_raw);
+  ck_assert_int_eq(canfdi_rx_frame(&rx, CANFDI_MSG_DCM_SENSOR_FRAME_ID, d, 8U, now + STEP_US), CANFDI_RX_ACCEPTED);
+  raw[2] = (uint16_t)(raw[2] + 10U);
+  cycle(true, true, false, raw);
+  ck_assert(canfdi_rx_fresh(&rx, CANFDI_RX_IN_DCM_OMEGA));
+  ck_assert_uint_eq(canfdi_rx_samples(&rx, CANFDI_RX_IN_DCM_OMEGA), 2U);
+  assert_value(CANFDI_RX_IN_DCM_OMEGA, raw[2]);
+  cycle(true, true, false, raw);
+  ck_assert_uint_eq(canfdi_rx_samples(&rx, CANFDI_RX_IN_DCM_OMEGA), 1U);
+  for (unsigned k = 0U; k < 10U; k++) {
+    cycle(false, true, false, raw);
+  }
+  ck_assert_uint_ne(rx.in[CANFDI_RX_IN_DCM_OMEGA].quality, CANFDI_RX_VALID);
+  cycle(true, true, false, raw);
+  ck_assert_uint_eq(canfdi_rx_samples(&rx, CANFDI_RX_IN_DCM_OMEGA), 0U);
+}
+END_TEST
+
 /* Before anything arrives: INVALID with the configured default, no
  * verdict, then the startup timeout after timeout_cycles. */
 START_TEST(startup_invalid_then_timeout)
@@ -1443,6 +1479,7 @@ static Suite *make_suite(void)
 
   tc = tcase_create("supervision");
   tcase_add_test(tc, healthy_stream_is_valid_and_passes);
+  tcase_add_test(tc, samples_count_the_frames_of_a_step);
   tcase_add_test(tc, startup_invalid_then_timeout);
   tcase_add_test(tc, first_timeout_window);
   tcase_add_loop_test(tc, timeout_exactly_after_n_missed_cycles, 0, 6);
