@@ -274,10 +274,18 @@ static int32_t xf_to_s32(xf_t a, int32_t frac)
 /* Blocks                                                                   */
 /* ------------------------------------------------------------------------ */
 
+/* Where column j of U starts in u[]: j (j - 1) / 2, written so that j = 0
+ * does not wrap j - 1 (well defined for unsigned, but the fuzz build's
+ * sanitizer flags every wrap that is not by design). */
+static unsigned u_base(unsigned j)
+{
+  return (j == 0U) ? 0U : ((j * (j - 1U)) / 2U);
+}
+
 static unsigned u_idx(unsigned i, unsigned j)
 {
   CANFDI_ASSERT(i < j);
-  return ((j * (j - 1U)) / 2U) + i;
+  return u_base(j) + i;
 }
 
 static uint32_t mag32(int32_t x)
@@ -332,7 +340,7 @@ static void blk_norm(int32_t v[], unsigned n, int32_t *e, int32_t emin)
       k = *e - emin;
     }
     for (i = 0U; i < n; i++) {
-      v[i] = canfdi_wrap_u32_to_s32((uint32_t)v[i] << (unsigned)k);
+      v[i] = v[i] * ((int32_t)1 << (unsigned)k); /* k <= 29 and |v| 2^k < 2^30: exact */
     }
     *e -= k;
   } else {
@@ -343,7 +351,7 @@ static void blk_norm(int32_t v[], unsigned n, int32_t *e, int32_t emin)
 /* U column j (entries u_0j .. u_(j-1)j) */
 static int32_t *u_col(canfdi_rls_t *r, unsigned j)
 {
-  return &r->u[(j * (j - 1U)) / 2U];
+  return &r->u[u_base(j)];
 }
 
 static void u_col_norm(canfdi_rls_t *r, unsigned j)
@@ -634,7 +642,7 @@ static void rls_forward(const canfdi_rls_t *r, const int32_t x[], int32_t ex, pf
   unsigned i;
   unsigned j;
   for (j = 0U; j < n; j++) {
-    const int32_t *col = &r->u[(j * (j - 1U)) / 2U];
+    const int32_t *col = &r->u[u_base(j)];
     const int32_t ue = (int32_t)r->u_e[j];
     int64_t acc;
     if (ue <= 0) {
@@ -948,7 +956,7 @@ bool canfdi_rls_invariants_hold(const canfdi_rls_t *r)
     lim = pf_add(lim, pf_make(lim.m, lim.e - 20));
     ok = (r->a0.m >= 0x80000000U) && blk_ok(r->theta, n);
     for (j = 0U; j < n; j++) {
-      ok = ok && (r->d[j].m >= 0x80000000U) && (r->u_e[j] >= U_EMIN) && blk_ok(&r->u[(j * (j - 1U)) / 2U], j);
+      ok = ok && (r->d[j].m >= 0x80000000U) && (r->u_e[j] >= U_EMIN) && blk_ok(&r->u[u_base(j)], j);
     }
     ok = ok && !pf_lt(lim, rls_trace_stored(r));
   }
