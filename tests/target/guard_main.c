@@ -737,7 +737,7 @@ static void guard_rx(void)
   sinku64(canfdi_rx_monitor_dtc(in_n));
   sink32(canfdi_rx_raw_to_q16(in_s32[1], in_s64[0], in_s64[1]));
   sink32(canfdi_rx_value(&rx, in_n % CANFDI_RX_IN_COUNT) + (canfdi_rx_valid(&rx, 0U) ? 1 : 0) +
-         (canfdi_rx_usable(&rx, 1U) ? 2 : 0) + (canfdi_rx_fresh(&rx, 2U) ? 4 : 0));
+         (canfdi_rx_usable(&rx, 1U) ? 2 : 0) + (canfdi_rx_fresh(&rx, 2U) ? 4 : 0) + (int)canfdi_rx_samples(&rx, 2U));
   sinku64((uint64_t)rx.report.prefailed + rx.diag.frames);
 }
 
