@@ -229,6 +229,7 @@ static void gate(canfdi_app_gate_t *g, const canfdi_app_cal_t *cal, bool in_ok, 
     /* holding, or interrupted (the rules' inputs are invalid anyway) */
   }
   g->in_ok = in_ok;
+  g->fresh = in_ok && fresh;
   g->started = g->started || in_ok;
   g->est_on = est_on;
 }
@@ -252,7 +253,6 @@ static void stage_gates(canfdi_app_t *app)
   bool re;
   gate(&app->dcm, &app->cal, dcm_ok, dcm_fresh, dcm_ok && !app->fb.dcm_sensor_bad, app->running,
        canfdi_est_dcm_has_run(&app->est_dcm), &rp, &re);
-  app->dcm.fresh = dcm_ok && dcm_fresh;
   if (rp) {
     canfdi_parity_dcm_restart(&app->parity_dcm);
   }
@@ -262,7 +262,6 @@ static void stage_gates(canfdi_app_t *app)
   }
   gate(&app->thr, &app->cal, thr_ok, thr_fresh, thr_est, app->running, canfdi_est_thr_has_run(&app->est_thr), &rp,
        &re);
-  app->thr.fresh = thr_ok && thr_fresh;
   if (rp) {
     canfdi_parity_thr_reset(&app->parity_thr);
   }

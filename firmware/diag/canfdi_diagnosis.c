@@ -211,14 +211,6 @@ static void compile_rule(const canfdi_diag_model_rule_t *r, canfdi_diagnosis_rul
   }
 }
 
-/*
- * The model rules whose residual zeros must be evidence against a flux
- * loss (init only): every DC-motor rule other than the flux rule itself,
- * unless it requires a symptom on a channel the flux rule expects at zero
- * (R_A up: the R_A estimate; U_A offset: UAC): that symptom already tells
- * it from a flux loss, whatever the residuals' zeros say. *flux: the flux
- * rule's index (CANFDI_DIAG_N_RULES if there is none).
- */
 /* The index of fault's model rule, CANFDI_DIAG_N_RULES if it has none. */
 static uint8_t rule_of(uint8_t fault)
 {
@@ -232,18 +224,21 @@ static uint8_t rule_of(uint8_t fault)
   return idx;
 }
 
+/*
+ * The model rules whose residual zeros must be evidence against a flux
+ * loss (init only): every DC-motor rule other than the flux rule itself,
+ * unless it requires a symptom on a channel the flux rule expects at zero
+ * (R_A up: the R_A estimate; U_A offset: UAC): that symptom already tells
+ * it from a flux loss, whatever the residuals' zeros say. *flux: the flux
+ * rule's index (CANFDI_DIAG_N_RULES if there is none).
+ */
 static uint32_t flux_gated_rules(const canfdi_diagnosis_rule_t rule[], uint8_t *flux)
 {
-  uint32_t fz = 0U;
+  const uint8_t f = rule_of(CANFDI_FAULT_DCM_FLUX_DOWN);
+  const uint32_t fz = (f < CANFDI_DIAG_N_RULES) ? (uint32_t)rule[f].zero : 0U;
   uint32_t gated = 0U;
   uint32_t i;
-  *flux = (uint8_t)CANFDI_DIAG_N_RULES;
-  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
-    if (canfdi_diag_model_rules[i].fault == CANFDI_FAULT_DCM_FLUX_DOWN) {
-      fz = rule[i].zero;
-      *flux = (uint8_t)i;
-    }
-  }
+  *flux = f;
   for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
     const canfdi_diagnosis_rule_t *m = &rule[i];
     if ((canfdi_diag_model_rules[i].comp == CANFDI_DIAG_COMP_DCM) && (i != (uint32_t)*flux) &&
