@@ -13,6 +13,8 @@
 /* Normalised states beyond +-2^47 (2^15 units in Q31.32) saturate every
  * output because wc >= 1; clamping there keeps x * wc inside int64_t. */
 #define SVF_V_CLAMP ((int64_t)1 << 47)
+/* The normalised states' bound (canfdi_svf_step): never reached. */
+#define SVF_V_BOUND ((int64_t)1 << 50)
 
 static uint64_t svf_gcd_u64(uint64_t a, uint64_t b)
 {
@@ -54,35 +56,6 @@ static int32_t svf_ratio_q31(int64_t num, uint64_t den)
     quot = (uint64_t)INT32_MAX;
   }
   return neg ? -(int32_t)quot : (int32_t)quot;
-}
-
-/*
- * The Q16.16 value of wc^k * v (v normalised Q31.32, k = 0..2), rounded half
- * up and saturated. Scaling and overflow: v is first clamped to +-2^47 (see
- * SVF_V_CLAMP) and again after each multiply by wc < 2^15, so every product
- * stays below 2^62.
- */
-static int32_t svf_out_q16(int64_t v, int32_t wc, unsigned k, uint32_t *sat)
-{
-  int64_t x = v;
-  unsigned i;
-  int32_t y;
-  for (i = 0U; i < k; i++) {
-    if (x > SVF_V_CLAMP) {
-      x = SVF_V_CLAMP;
-    } else if (x < -SVF_V_CLAMP) {
-      x = -SVF_V_CLAMP;
-    } else {
-      /* in range */
-    }
-    x *= (int64_t)wc;
-  }
-  x = canfdi_asr64_rnd(x, 16U);
-  y = canfdi_sat_s64_to_s32(x);
-  if ((int64_t)y != x) {
-    canfdi_count_inc(sat);
-  }
-  return y;
 }
 
 int32_t canfdi_svf_init(canfdi_svf_t *f, const canfdi_svf_cfg_t *cfg)
@@ -153,55 +126,120 @@ void canfdi_svf_reset(canfdi_svf_t *f, int32_t x0_q16)
   canfdi_count_inc(&f->diag.resets);
 }
 
+/*
+ * round(a g / 2^31), half up, for |a| < 2^56 and a Q31 g: canfdi_mul_s64_q31
+ * without its saturation, which cannot act in this range (|result| < 2^56).
+ * a = ah 2^32 + al (ah the floor, al in [0, 2^32)): 2 ah g is exact and
+ * adding it does not change the rounding of al g / 2^31.
+ * Cost: SMULL and a 32x32->64 product with a sign fix on ARMv7-M; inline,
+ * as a call costs more than the work.
+ */
+static inline __attribute__((always_inline)) int64_t svf_mul_q31(int64_t a, int32_t g)
+{
+  /* the high word read as signed is floor(a / 2^32): |ah| < 2^24 */
+  const int32_t ah = canfdi_wrap_u32_to_s32((uint32_t)((uint64_t)a >> 32));
+  const uint32_t al = (uint32_t)((uint64_t)a & 0xFFFFFFFFU);
+  const int64_t hi = (int64_t)ah * (int64_t)g;      /* |hi| < 2^55 */
+  const int64_t lo = canfdi_asr64_rnd((int64_t)al * (int64_t)g, 31U);
+  return (2 * hi) + lo;
+}
+
+/* x limited to +-SVF_V_BOUND (see svf_state_add). */
+static inline int64_t svf_bound(int64_t x)
+{
+  int64_t y = x;
+  if (y > SVF_V_BOUND) {
+    y = SVF_V_BOUND;
+  } else if (y < -SVF_V_BOUND) {
+    y = -SVF_V_BOUND;
+  } else {
+    /* in range: always, see the header */
+  }
+  return y;
+}
+
+/*
+ * The Q16.16 value of wc^k v (v normalised Q31.32, k = 0, 1, 2), rounded
+ * half up and saturated (counted in *sat). Scaling and overflow: v is
+ * clamped to +-2^47 (SVF_V_CLAMP: beyond it every output saturates, as
+ * wc >= 1) before each multiply by wc < 2^15, so every product stays below
+ * 2^62. One function per k: a loop over a run-time k costs more than the
+ * work.
+ */
+static inline int32_t svf_out_k0(int64_t v, uint32_t *sat)
+{
+  const int64_t x = canfdi_asr64_rnd(v, 16U);
+  const int32_t y = canfdi_sat_s64_to_s32(x);
+  if ((int64_t)y != x) {
+    canfdi_count_inc(sat);
+  }
+  return y;
+}
+
+static inline int32_t svf_out_k1(int64_t v, int32_t wc, uint32_t *sat)
+{
+  const int64_t c = (v > SVF_V_CLAMP) ? SVF_V_CLAMP : ((v < -SVF_V_CLAMP) ? -SVF_V_CLAMP : v);
+  return svf_out_k0(c * (int64_t)wc, sat);
+}
+
+static inline int32_t svf_out_k2(int64_t v, int32_t wc, uint32_t *sat)
+{
+  const int64_t c = (v > SVF_V_CLAMP) ? SVF_V_CLAMP : ((v < -SVF_V_CLAMP) ? -SVF_V_CLAMP : v);
+  int64_t x = c * (int64_t)wc;
+  x = (x > SVF_V_CLAMP) ? SVF_V_CLAMP : ((x < -SVF_V_CLAMP) ? -SVF_V_CLAMP : x);
+  return svf_out_k0(x * (int64_t)wc, sat);
+}
+
+/*
+ * The step with plain 64-bit sums. Scaling and overflow: the normalised
+ * states of the (stable, non-expansive) filter stay below the input range,
+ * |v_i| <= L1_i 2^47 with the L1 norms of the state impulse responses at
+ * most 1 (v_1), 0.74 (v_2, n = 2), 0.55 and 0.63 (v_2, v_3, n = 3) over the
+ * whole wc domain; svf_bound keeps them within 2^50 whatever happens, so
+ * w < 2^54, every G w product < 2^54 and their sums < 2^56: nothing below
+ * can overflow, and the result is the same as with saturating sums.
+ */
 void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16)
 {
-  int64_t w[CANFDI_SVF_MAX_ORDER];
-  int64_t s;
-  unsigned n;
-  unsigned i;
-  unsigned j;
+  const int32_t wc = f->cfg.omega_c_rad_s;
+  const int64_t v0 = f->v_q32[0];
+  const int64_t v1 = f->v_q32[1];
+  /* the input sum u(k) + u(k+1) is exact: < 2^32, times 2^16 < 2^48 */
+  const int64_t us = ((int64_t)f->u_prev_q16 + (int64_t)x_q16) * 65536;
+  int64_t d2;
   CANFDI_ASSERT(f != NULL);
-  n = f->cfg.order;
-  CANFDI_ASSERT((n == 2U) || (n == 3U));
-
-  /* w = 2 M v(k) + b (u(k) + u(k+1)), Q31.32. The input sum is exact:
-   * |u(k) + u(k+1)| < 2^32, times 2^16 < 2^48. */
-  s = ((int64_t)f->u_prev_q16 + (int64_t)x_q16) * 65536;
-  s = canfdi_sub_s64_sat(s, canfdi_shl64_sat(f->v_q32[0], 1U));
-  if (n == 2U) {
-    w[0] = canfdi_shl64_sat(f->v_q32[1], 1U);
-    s = canfdi_sub_s64_sat(s, canfdi_shl64_sat(f->v_q32[1], 2U));
-    w[1] = s;
+  CANFDI_ASSERT((f->cfg.order == 2U) || (f->cfg.order == 3U));
+  if (f->cfg.order == 2U) {
+    /* w = (2 v2, u(k) + u(k+1) - 2 v1 - 4 v2) */
+    const int64_t w0 = 2 * v1;
+    const int64_t w1 = us - (2 * v0) - (4 * v1);
+    const int64_t n0 = svf_bound(v0 + (svf_mul_q31(w0, f->g_q31[0][0]) + svf_mul_q31(w1, f->g_q31[0][1])));
+    const int64_t n1 = svf_bound(v1 + (svf_mul_q31(w0, f->g_q31[1][0]) + svf_mul_q31(w1, f->g_q31[1][1])));
+    f->v_q32[0] = n0;
+    f->v_q32[1] = n1;
+    /* f_2(k+1) = u(k+1) - v1 - 2 v2 (normalised second derivative) */
+    d2 = ((int64_t)x_q16 * 65536) - n0 - (2 * n1);
   } else {
-    const int64_t v12 = canfdi_add_s64_sat(f->v_q32[1], f->v_q32[2]);
-    w[0] = canfdi_shl64_sat(f->v_q32[1], 1U);
-    w[1] = canfdi_shl64_sat(f->v_q32[2], 1U);
-    /* 6 (v2 + v3) = 4 (v2 + v3) + 2 (v2 + v3) */
-    s = canfdi_sub_s64_sat(s, canfdi_shl64_sat(v12, 2U));
-    s = canfdi_sub_s64_sat(s, canfdi_shl64_sat(v12, 1U));
-    w[2] = s;
-  }
-
-  /* v(k+1) = v(k) + G w */
-  for (i = 0U; i < n; i++) {
-    int64_t dv = 0;
-    for (j = 0U; j < n; j++) {
-      dv = canfdi_add_s64_sat(dv, canfdi_mul_s64_q31(w[j], f->g_q31[i][j]));
-    }
-    f->v_q32[i] = canfdi_add_s64_sat(f->v_q32[i], dv);
+    const int64_t v2 = f->v_q32[2];
+    /* w = (2 v2, 2 v3, u(k) + u(k+1) - 2 v1 - 6 (v2 + v3)) */
+    const int64_t w0 = 2 * v1;
+    const int64_t w1 = 2 * v2;
+    const int64_t w2 = us - (2 * v0) - (6 * (v1 + v2));
+    const int64_t n0 = svf_bound(v0 + ((svf_mul_q31(w0, f->g_q31[0][0]) + svf_mul_q31(w1, f->g_q31[0][1])) +
+                                       svf_mul_q31(w2, f->g_q31[0][2])));
+    const int64_t n1 = svf_bound(v1 + ((svf_mul_q31(w0, f->g_q31[1][0]) + svf_mul_q31(w1, f->g_q31[1][1])) +
+                                       svf_mul_q31(w2, f->g_q31[1][2])));
+    const int64_t n2 = svf_bound(v2 + ((svf_mul_q31(w0, f->g_q31[2][0]) + svf_mul_q31(w1, f->g_q31[2][1])) +
+                                       svf_mul_q31(w2, f->g_q31[2][2])));
+    f->v_q32[0] = n0;
+    f->v_q32[1] = n1;
+    f->v_q32[2] = n2;
+    d2 = n2;
   }
   f->u_prev_q16 = x_q16;
-
-  f->y_q16 = svf_out_q16(f->v_q32[0], f->cfg.omega_c_rad_s, 0U, &f->diag.out_saturations);
-  f->dy_q16 = svf_out_q16(f->v_q32[1], f->cfg.omega_c_rad_s, 1U, &f->diag.out_saturations);
-  if (n == 2U) {
-    /* f_2(k+1) = u(k+1) - v1 - 2 v2 (normalised second derivative) */
-    s = canfdi_sub_s64_sat((int64_t)x_q16 * 65536, f->v_q32[0]);
-    s = canfdi_sub_s64_sat(s, canfdi_shl64_sat(f->v_q32[1], 1U));
-  } else {
-    s = f->v_q32[2];
-  }
-  f->d2y_q16 = svf_out_q16(s, f->cfg.omega_c_rad_s, 2U, &f->diag.out_saturations);
+  f->y_q16 = svf_out_k0(f->v_q32[0], &f->diag.out_saturations);
+  f->dy_q16 = svf_out_k1(f->v_q32[1], wc, &f->diag.out_saturations);
+  f->d2y_q16 = svf_out_k2(d2, wc, &f->diag.out_saturations);
   canfdi_count_inc(&f->diag.steps);
 }
 
