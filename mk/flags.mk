@@ -66,7 +66,9 @@ UNIT_CFLAGS := -Itests/unit -Ihost_sim $(CHECK_CFLAGS)
 # installed for i386 beside the amd64 one (the package is not Multi-Arch),
 # so `make deps` unpacks the i386 package's static library into
 # $(CHECK_I386_DIR) (tools/deps.sh).
-HOST_C11_CFLAGS := $(patsubst $(C_STD),-std=c11,$(HOST_CFLAGS))
+# The C11 flavour also builds the portable forms of what has a compiler
+# builtin (core/canfdi_fixp.h), so that both forms are tested.
+HOST_C11_CFLAGS := $(patsubst $(C_STD),-std=c11,$(HOST_CFLAGS)) -DCANFDI_FIXP_PORTABLE
 HOST_M32_CFLAGS := -m32 $(HOST_CFLAGS)
 CHECK_I386_DIR := .deps/check-i386
 HOST_M32_LDFLAGS := -m32 -L$(CHECK_I386_DIR)
