@@ -91,3 +91,14 @@ bench-replay-settle: deps $(SIL_REL_BIN) $(REPLAY_BIN)
 	@$(PY) bench/bench_replay_settle.py --sil $(SIL_REL_BIN) --out $(BUILD)/bench/replay_settle.json
 
 BENCH_STEPS += bench-replay-settle
+
+# canfdi-replay on logger time stamps (bench/bench_replay_jitter.py): every
+# SIL fault recording re-stamped with a seeded jitter on every frame (10,
+# 200, 300 us) and a drifting logger clock (+-100 ppm), replayed with
+# --clock timestamps; codes against the recorded ECU's (same, missed, wrong
+# extra) ($(BUILD)/bench/replay_jitter.json, ~1 min).
+.PHONY: bench-replay-jitter
+bench-replay-jitter: deps $(BUILD)/bin/canfdi-sil $(REPLAY_BIN)
+	@$(PY) bench/bench_replay_jitter.py --out $(BUILD)/bench/replay_jitter.json
+
+BENCH_STEPS += bench-replay-jitter

@@ -14,6 +14,7 @@ import functools
 import io
 import json
 import os
+import random
 import re
 import subprocess
 import sys
@@ -133,4 +134,25 @@ def cut_log(src: Path, dst: Path, t_from: float) -> Path:
         for line in f:
             if float(line[1:line.index(")")]) >= t_from - 1e-9:
                 g.write(line)
+    return dst
+
+
+def jitter_log(src: Path, dst: Path, jitter_us: int, ppm: int = 0, seed: int = 1,
+               base_us: int = 1_700_000_000_000_000) -> Path:
+    """A candump log as a real logger would have stamped it: every frame's time stamp moved by a seeded
+    uniform jitter of +-jitter_us, the logger's clock running ppm parts per million fast (negative: slow)
+    against the sensor nodes' from base_us (epoch microseconds), and the stamps never decreasing (the
+    file's order is the bus's: a frame that drew an earlier stamp than the one before takes that one's)."""
+    rng = random.Random(seed)
+    prev = None
+    with src.open() as f, dst.open("w") as g:
+        for line in f:
+            close = line.index(")")
+            sec, _, frac = line[1:close].partition(".")
+            t = int(sec) * 1_000_000 + int(frac.ljust(6, "0")[:6])
+            n = base_us + t + (t * ppm) // 1_000_000 + rng.randint(-jitter_us, jitter_us)
+            if prev is not None and n < prev:
+                n = prev
+            prev = n
+            g.write(f"({n // 1_000_000:010d}.{n % 1_000_000:06d}){line[close + 1:]}")
     return dst

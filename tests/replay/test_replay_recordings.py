@@ -30,6 +30,8 @@ def test_power_up_reproduces_every_scenario(sil_logs: dict[Path, Path], tmp_path
         if not (ecu["frames"] > 0 and ecu["identical"] == ecu["frames"] and ecu["differing"] == 0
                 and ecu["replay_only"] == 0):
             problems.append(f"ECU frames {ecu}")
+        if lg["grid_moves"] != 0:
+            problems.append(f"the step grid moved {lg['grid_moves']} times on the recording's own time stamps")
         if set(got) != set(want) or any(abs(got[c] - want[c]) > 1e-9 for c in want):
             problems.append(f"codes {got} != recorded {want}")
         if rc != (1 if want else 0):

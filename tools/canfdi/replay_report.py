@@ -13,7 +13,9 @@ The JSON report (``Report.to_json``) has this schema (version
     schema, tool, firmware {id, calibration}, dbc {path, sha256},
     map {path, sha256, dbc, dbc_sha256, checks_not_applied} | null,
     logs [{index, path, format, sha256, lines, frames, steps, first_s, last_s,
-           clock, channel, start, start_decided_by, settled_from_s,
+           clock, grid_moves (timestamps clock: times the step grid followed
+           the sensor frames, tools/replay/README.md), channel, start,
+           start_decided_by, settled_from_s,
            recorded_ecu {frames, identical, differing, recorded_only,
                          replay_only, first_difference}}],
     dtcs [{code, description, log, first_failed_s, status, status_bits,
@@ -574,6 +576,7 @@ class Report:
             "index": lg.index, "path": lg.path, "format": lg.fmt, "sha256": lg.sha256,
             "lines": lg.eof.get("lines"), "frames": lg.eof.get("frames"), "steps": lg.eof.get("steps"),
             "first_s": lg.eof.get("first_t"), "last_s": lg.eof.get("last_t"), "clock": lg.clock,
+            "grid_moves": lg.eof.get("grid_moves", 0),
             "channel": lg.channel, "start": lg.start, "start_decided_by": lg.start_decided_by,
             "settled_from_s": lg.settle_until if lg.start == "mid-drive" else lg.eof.get("first_t"),
             "recorded_ecu": {

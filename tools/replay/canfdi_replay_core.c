@@ -24,11 +24,35 @@
  *               canfdi-ecu --lockstep, SimStep(k) runs the step at k ms and
  *               every input frame before it goes to that step; a log time
  *               is the step's k ms, as canfdi-watch reads such logs.
- *   timestamps  a step every 1 ms of log time from the first frame's time
- *               stamp; the frames stamped at or before a step's time go in
- *               before that step. In a SIL log the ECU's frames of step k
- *               carry the time stamp of the sensor frames of step k (they
- *               follow them in the file): they are that step's output.
+ *   timestamps  a step every 1 ms of log time, on a grid that follows the
+ *               sensor frames: a step takes the frames stamped up to half
+ *               a step after its time (GRID_MARGIN_US), and its time is
+ *               where its DcmSensor and ThrSensor frames are expected, so
+ *               each of them falls into a step of its own even when the
+ *               logger's time stamps jitter (by up to half a step less
+ *               GRID_MOVE_US and half the distance between the two
+ *               plants' phases). The grid starts at the sensor frames'
+ *               mean phase in the frames read ahead, or at the first
+ *               frame's time stamp when that is less than GRID_MOVE_US off
+ *               it (so the first step's time may lie up to half a step
+ *               before the first frame's). After each sensor frame whose
+ *               time stamp is its own (not one earlier than the last
+ *               frame's, nor an outlier's) the grid moves, by the whole
+ *               error at once, when the best step time for the sensor
+ *               frames' filtered phases (the middle of the two when both
+ *               plants' frames come) is GRID_MOVE_US or more off its own,
+ *               as it is once the logger's clock drifts against the sensor
+ *               nodes': the steps keep the sensor nodes' 1 ms, and the
+ *               supervisor's clock advances 1 ms a step whatever the
+ *               logger's clock says. A plant whose frames stopped for
+ *               PHASE_STALE_STEPS steps, or come slower than every step
+ *               (--rx-rate), does not steer it; after a gap or a jump of
+ *               the time stamps the next sensor frames set it anew; a log
+ *               without sensor frames keeps the first frame's time stamp.
+ *               In a SIL log every frame of step k carries the time stamp
+ *               k ms, the sensor frames first and the ECU's frames (that
+ *               step's output) after them; the grid does not move there,
+ *               so the steps are the recorded ECU's.
  * Log times are seconds from the first frame, or the time stamps
  * themselves when the first one is below 1e6 s (already relative, e.g. a
  * canfdi-sil log or a cut of it), as canfdi-watch does.
@@ -96,6 +120,10 @@
 #define EXIT_USAGE 2
 
 #define STEP_US 1000
+#define GRID_MARGIN_US 500           /* a step takes the frames up to this long after its time */
+#define GRID_MOVE_US 100             /* the grid moves when the sensor frames are this far off its step times */
+#define PHASE_FILTER 16              /* the sensor frames' phase: a first-order filter, gain 1/16 */
+#define PHASE_STALE_STEPS 10U        /* a plant whose frames stopped this long no longer steers the grid */
 #define CMD_FRESH_STEPS 10U          /* a command older than this is not known */
 #define THR_AGREE_STEPS 1000U        /* recorded = own throttle command this long: the reference is ours again */
 #define PU_MIN_FRAMES 20U            /* ECU frames compared before the start is called power-up */
@@ -312,7 +340,12 @@ typedef struct {
   int64_t origin_us;       /* log time = abs - origin */
   int64_t shift_us;        /* added to time stamps after a jump back */
   int64_t last_ts_us;      /* last time stamp seen (shifted) */
-  int64_t next_step_abs;   /* timestamps: the next step's time */
+  int64_t next_step_abs;   /* timestamps: the next step's time (its frames: up to GRID_MARGIN_US later) */
+  int32_t phase_us[2];     /* timestamps: DcmSensor, ThrSensor frames' filtered phase to the step times */
+  bool phase_seen[2];      /* ... known: the plant's frames came within PHASE_STALE_STEPS */
+  uint64_t phase_step[2];  /* ... the step count at the plant's last frame */
+  int32_t grid_seed_us;    /* timestamps: the first step's time after the first frame's */
+  uint64_t grid_moves;     /* timestamps: times the grid followed the sensor frames */
   int64_t step_log_us;     /* log time of the current batch's step */
   int64_t first_step_log_us;
   int64_t last_k;          /* simstep: last step run, -1 none */
@@ -1099,6 +1132,177 @@ static bool on_channel(const rp_frame_t *f, uint64_t line)
   return false;
 }
 
+/* ------------------------------------------------------------ the timestamps grid */
+
+/* x on the circle of one step, in (-STEP_US/2, STEP_US/2]. */
+static int32_t wrap_step(int64_t x)
+{
+  int64_t w = x % STEP_US;
+  if (w > (STEP_US / 2)) {
+    w -= STEP_US;
+  } else if (w <= -(STEP_US / 2)) {
+    w += STEP_US;
+  } else {
+    /* in range */
+  }
+  return (int32_t)w;
+}
+
+/* The plant whose sensor frame f is, for the grid: 0 DcmSensor, 1
+ * ThrSensor; -1 any other frame, one of another channel than chan, and one
+ * of a plant mapped to a slower rate than the step (--rx-rate: it comes
+ * one step in several, so where it falls says nothing of the step times). */
+static int grid_plant(const rp_frame_t *f, const char *chan)
+{
+  int i = -1;
+  if ((f->kind == RP_KIND_DATA) && !f->ext && (strcmp(f->chan, chan) == 0)) {
+    if (f->id == CANFDI_RP_MSG_DCM_SENSOR_FRAME_ID) {
+      i = CANFDI_RX_F_DCM_SENSOR;
+    } else if (f->id == CANFDI_RP_MSG_THR_SENSOR_FRAME_ID) {
+      i = CANFDI_RX_F_THR_SENSOR;
+    } else {
+      /* not a sensor frame */
+    }
+  }
+  if ((i >= 0) && (opt.rx_rate_ms[i] > (uint32_t)(STEP_US / 1000))) {
+    i = -1;
+  }
+  return i;
+}
+
+/* A sensor frame of plant i, e microseconds after the time of the step it
+ * went into: the plant's filtered phase to the step times (its first frame
+ * sets it). */
+static void track_phase(unsigned i, int64_t e)
+{
+  unsigned k;
+  for (k = 0U; k < 2U; k++) {
+    if (rp.phase_seen[k] && ((rp.steps - rp.phase_step[k]) > PHASE_STALE_STEPS)) {
+      /* its frames stopped (a timeout): the other plant's alone steer the
+       * grid, and its next frame sets its phase anew */
+      rp.phase_seen[k] = false;
+    }
+  }
+  rp.phase_step[i] = rp.steps;
+  if (!rp.phase_seen[i]) {
+    rp.phase_us[i] = wrap_step(e);
+    rp.phase_seen[i] = true;
+  } else {
+    rp.phase_us[i] = wrap_step((int64_t)rp.phase_us[i] + (wrap_step(e - rp.phase_us[i]) / PHASE_FILTER));
+  }
+}
+
+/* How far the sensor frame nearest to a step boundary would be from it
+ * with the grid moved by c (STEP_US / 2: no sensor frame). */
+static int32_t grid_room(int32_t c)
+{
+  int32_t room = STEP_US / 2;
+  unsigned i;
+  for (i = 0U; i < 2U; i++) {
+    if (rp.phase_seen[i]) {
+      const int32_t e = wrap_step((int64_t)rp.phase_us[i] - c);
+      const int32_t r = (STEP_US / 2) - ((e < 0) ? -e : e);
+      room = (r < room) ? r : room;
+    }
+  }
+  return room;
+}
+
+/* The move that puts the sensor frames farthest from the step boundaries:
+ * onto their phase when one plant's frames come; when both come, onto the
+ * middle of the shorter arc between their phases (the boundary then lies
+ * in the middle of the longer one), the smaller move of two equal ones. */
+static int32_t grid_best(void)
+{
+  int32_t c = 0;
+  if (rp.phase_seen[0] && rp.phase_seen[1]) {
+    const int32_t c1 = wrap_step((int64_t)rp.phase_us[0] + (wrap_step((int64_t)rp.phase_us[1] - rp.phase_us[0]) / 2));
+    const int32_t c2 = wrap_step((int64_t)c1 + (STEP_US / 2));
+    const int32_t r1 = grid_room(c1);
+    const int32_t r2 = grid_room(c2);
+    const int32_t a1 = (c1 < 0) ? -c1 : c1;
+    const int32_t a2 = (c2 < 0) ? -c2 : c2;
+    c = ((r1 > r2) || ((r1 == r2) && (a1 <= a2))) ? c1 : c2;
+  } else if (rp.phase_seen[0] || rp.phase_seen[1]) {
+    c = rp.phase_us[rp.phase_seen[0] ? 0 : 1];
+  } else {
+    /* no sensor frame yet */
+  }
+  return c;
+}
+
+/* The grid moved by c: the phases relative to it. */
+static void grid_shift(int32_t c)
+{
+  unsigned i;
+  for (i = 0U; i < 2U; i++) {
+    rp.phase_us[i] = wrap_step((int64_t)rp.phase_us[i] - c);
+  }
+}
+
+/* The timestamps grid follows the sensor frames (the file header comment):
+ * once their best step time is GRID_MOVE_US or more off the grid's, the
+ * next step moves there. */
+static void grid_follow(void)
+{
+  const int32_t c = grid_best();
+  if (((c >= GRID_MOVE_US) || (c <= -GRID_MOVE_US)) && (grid_room(c) > grid_room(0))) {
+    rp.next_step_abs += c;
+    grid_shift(c);
+    rp.grid_moves++;
+  }
+}
+
+/* A gap or a jump of the time stamps: the sensor frames after it set the
+ * grid anew (the logger may have restarted, the stamps moved by any amount). */
+static void grid_forget(void)
+{
+  rp.phase_seen[0] = false;
+  rp.phase_seen[1] = false;
+}
+
+/* The grid's start (timestamps clock): the sensor frames' mean phases to
+ * the first frame's time stamp in the frames read ahead, so that the first
+ * step takes its plant's first samples as the later ones take theirs. */
+static void grid_seed(void)
+{
+  unsigned i;
+  unsigned k;
+  const int64_t t0 = rp.look[0].ts_us;
+  const char *chan = rp.chan_fixed ? rp.chan : NULL;
+  for (i = 0U; (chan == NULL) && (i < rp.n_look); i++) {
+    /* the channel on_channel() will judge */
+    const rp_frame_t *f = &rp.look[i];
+    if ((f->kind == RP_KIND_DATA) && !f->ext && in_dbc(f->id)) {
+      chan = f->chan;
+    }
+  }
+  for (k = 0U; k < 2U; k++) {
+    int64_t sum = 0;
+    int64_t n = 0;
+    int32_t ref = 0;
+    for (i = 0U; (chan != NULL) && (i < rp.n_look); i++) {
+      const rp_frame_t *f = &rp.look[i];
+      if ((grid_plant(f, chan) == (int)k) && (f->ts_us >= t0) && ((f->ts_us - t0) <= LOOKAHEAD_US)) {
+        /* around the first one's phase: the mean of a circular quantity */
+        if (n == 0) {
+          ref = wrap_step(f->ts_us - t0);
+        }
+        sum += wrap_step(f->ts_us - t0 - ref);
+        n++;
+      }
+    }
+    rp.phase_seen[k] = (n > 0);
+    rp.phase_step[k] = 0U;
+    rp.phase_us[k] = (n > 0) ? wrap_step(ref + (sum / n)) : 0;
+  }
+  rp.grid_seed_us = grid_best();
+  if ((rp.grid_seed_us < GRID_MOVE_US) && (rp.grid_seed_us > -GRID_MOVE_US)) {
+    rp.grid_seed_us = 0; /* close enough: the first frame's time stamp */
+  }
+  grid_shift(rp.grid_seed_us);
+}
+
 /* One frame of the channel judged, in the current batch. frame_log_us: its
  * log time (ECU frames are reported at it); now_us: the supervisor's clock
  * at its reception. */
@@ -1217,14 +1421,17 @@ static void mark_gap(int64_t from_log_us, int64_t to_log_us)
 
 static int64_t shadow_next_us; /* timestamps: the supervisor's clock of the next step */
 
-/* A frame at time stamp ts (shifted) on the accepted time base. */
-static void ts_accept(const rp_frame_t *f, int64_t ts, uint64_t line)
+/* A frame at time stamp ts (shifted) on the accepted time base; stamp_ok:
+ * ts is its own time stamp (not an outlier's, taken at the current time). */
+static void ts_accept(const rp_frame_t *f, int64_t ts, uint64_t line, bool stamp_ok)
 {
+  int plant;
   if (ts < rp.last_ts_us) {
     const int64_t back = rp.last_ts_us - ts;
     rp.back_n++;
     if (back > opt.gap_us) {
       rp.shift_us += back;
+      grid_forget();
       fprintf(ev, "{\"ev\":\"rebase\",\"file\":%d,\"line\":%" PRIu64 ",\"t\":", rp.file_index, line);
       ev_time(log_us_of_abs(rp.last_ts_us));
       fprintf(ev, ",\"back_us\":%" PRId64 "}\n", back);
@@ -1236,9 +1443,11 @@ static void ts_accept(const rp_frame_t *f, int64_t ts, uint64_t line)
       /* counted */
     }
     ts = rp.last_ts_us;
+    stamp_ok = false; /* taken at the last one's: where the frame fell is not known */
   }
   if ((ts - rp.last_ts_us) > opt.gap_us) {
     mark_gap(log_us_of_abs(rp.last_ts_us), log_us_of_abs(ts));
+    grid_forget();
     if ((ts - rp.next_step_abs) > GAP_STEP_MAX_US) {
       /* step through the first GAP_STEP_MAX_US of it, then skip to the end
        * (the supervisor's clock sees only the steps it ran) */
@@ -1252,7 +1461,7 @@ static void ts_accept(const rp_frame_t *f, int64_t ts, uint64_t line)
       rp.next_step_abs += ((ts - rp.next_step_abs) / STEP_US) * STEP_US;
     }
   }
-  while (ts > rp.next_step_abs) {
+  while (ts > (rp.next_step_abs + GRID_MARGIN_US)) {
     rp.step_log_us = log_us_of_abs(rp.next_step_abs);
     run_step((uint32_t)shadow_next_us);
     rp.next_step_abs += STEP_US;
@@ -1260,7 +1469,14 @@ static void ts_accept(const rp_frame_t *f, int64_t ts, uint64_t line)
   }
   rp.last_ts_us = ts;
   rp.step_log_us = log_us_of_abs(rp.next_step_abs);
-  handle_frame(f, line, log_us_of_abs(ts), (uint32_t)(shadow_next_us - (rp.next_step_abs - ts)));
+  /* on the supervisor's clock a frame comes no later than its step */
+  handle_frame(f, line, log_us_of_abs(ts),
+               (uint32_t)(shadow_next_us - ((ts < rp.next_step_abs) ? (rp.next_step_abs - ts) : 0)));
+  plant = rp.chan_fixed ? grid_plant(f, rp.chan) : -1;
+  if (stamp_ok && (plant >= 0)) {
+    track_phase((unsigned)plant, ts - rp.next_step_abs);
+    grid_follow();
+  }
 }
 
 static int64_t abs64(int64_t x) { return (x < 0) ? -x : x; }
@@ -1279,7 +1495,7 @@ static void ts_flush_outliers(void)
       ev_time(rp.pend[i].ts_us);
       fprintf(ev, "}\n");
     }
-    ts_accept(&rp.pend[i], rp.last_ts_us, rp.pend_line[i]);
+    ts_accept(&rp.pend[i], rp.last_ts_us, rp.pend_line[i], false);
   }
   rp.n_pend = 0U;
 }
@@ -1297,7 +1513,7 @@ static void ts_frame(rp_frame_t *f, uint64_t line)
     rp.have_t0 = true;
     rp.t0_abs_us = ts;
     rp.origin_us = (ts < INT64_C(1000000000000)) ? 0 : ts;
-    rp.next_step_abs = ts;
+    rp.next_step_abs = ts + rp.grid_seed_us;
     rp.last_ts_us = ts;
     shadow_next_us = 0;
   }
@@ -1310,7 +1526,7 @@ static void ts_frame(rp_frame_t *f, uint64_t line)
       if (rp.n_pend >= JUMP_CONFIRM) {
         unsigned i;
         for (i = 0U; i < rp.n_pend; i++) {
-          ts_accept(&rp.pend[i], rp.pend[i].ts_us + rp.shift_us, rp.pend_line[i]);
+          ts_accept(&rp.pend[i], rp.pend[i].ts_us + rp.shift_us, rp.pend_line[i], true);
         }
         rp.n_pend = 0U;
       }
@@ -1324,13 +1540,13 @@ static void ts_frame(rp_frame_t *f, uint64_t line)
     rp.n_pend = 1U;
     return;
   }
-  ts_accept(f, ts, line);
+  ts_accept(f, ts, line, true);
 }
 
 static void ts_end(void)
 {
   ts_flush_outliers();
-  if (rp.batch_nonempty || (rp.have_t0 && (rp.last_ts_us == rp.next_step_abs))) {
+  if (rp.batch_nonempty || (rp.have_t0 && (rp.last_ts_us >= rp.next_step_abs))) {
     rp.step_log_us = log_us_of_abs(rp.next_step_abs);
     run_step((uint32_t)shadow_next_us);
     rp.next_step_abs += STEP_US;
@@ -1421,6 +1637,9 @@ static void decide_clock(void)
   rp.clock_decided = true;
   fprintf(ev, "{\"ev\":\"clock\",\"file\":%d,\"clock\":\"%s\"}\n", rp.file_index,
           (rp.clock == CLOCK_SIMSTEP) ? "simstep" : "timestamps");
+  if ((rp.clock == CLOCK_TIMESTAMPS) && (rp.n_look > 0U)) {
+    grid_seed();
+  }
   for (i = 0U; i < rp.n_look; i++) {
     route(&rp.look[i], rp.look_line[i]);
   }
@@ -1498,6 +1717,10 @@ static void reset_file_state(int index, const char *name)
   rp.clock_decided = false;
   rp.n_look = 0U;
   rp.have_t0 = false;
+  rp.grid_moves = 0U;
+  rp.grid_seed_us = 0;
+  rp.phase_seen[0] = false;
+  rp.phase_seen[1] = false;
   rp.shift_us = 0;
   rp.last_k = -1;
   rp.k0 = -1;
@@ -1594,9 +1817,11 @@ static void end_file(void)
   fprintf(ev, ",\"gaps\":%" PRIu64 ",\"back\":%" PRIu64 ",\"error_frames\":%" PRIu64 ",\"fd_frames\":%" PRIu64
               ",\"fd_line\":%" PRIu64 ",\"remote_frames\":%" PRIu64 ",\"remote_line\":%" PRIu64
               ",\"ext_frames\":%" PRIu64 ",\"ext_line\":%" PRIu64 ",\"cmd_bad_crc\":%" PRIu64
-              ",\"rec_e2e_bad\":%" PRIu64 ",\"simstep_bad\":%" PRIu64 ",\"outliers\":%" PRIu64 ",\"channel\":",
+              ",\"rec_e2e_bad\":%" PRIu64 ",\"simstep_bad\":%" PRIu64 ",\"outliers\":%" PRIu64
+              ",\"grid_moves\":%" PRIu64 ",\"channel\":",
           rp.gaps, rp.back_n, rp.err_frames, rp.fd_frames, rp.fd_line, rp.remote_frames, rp.remote_line,
-          rp.ext_frames, rp.ext_line, rp.cmd_bad_crc, rp.rec_e2e_bad, rp.simstep_bad, rp.outliers);
+          rp.ext_frames, rp.ext_line, rp.cmd_bad_crc, rp.rec_e2e_bad, rp.simstep_bad, rp.outliers,
+          rp.grid_moves);
   ev_str(rp.chan_fixed ? rp.chan : "", rp.chan_fixed ? strlen(rp.chan) : 0U);
   fprintf(ev, ",\"other_channels\":{");
   for (i = 0U; i < rp.n_other; i++) {
