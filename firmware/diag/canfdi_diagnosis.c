@@ -349,17 +349,37 @@ static void pers_step(canfdi_diagnosis_pers_t *p, bool valid, int8_t t, uint16_t
   }
 }
 
-static void channel(canfdi_diagnosis_t *d, uint32_t c, uint32_t j, int32_t x, bool valid)
+/* Steps since the channel's value was last at or above the zero level
+ * (valid), up to sym_off_steps: settled there. */
+static void channel_quiet(const canfdi_diagnosis_t *d, canfdi_diagnosis_pers_t *p, int32_t x, bool valid)
 {
-  canfdi_diagnosis_pers_t *p = &d->ch[c][j];
-  d->x_q16[c][j] = valid ? x : 0;
-  pers_step(p, valid, ternary(d, x, p->state), d->cfg.sym_on_steps, d->cfg.sym_off_steps);
   if (valid && (abs_sat(x) >= d->cfg.off_q16)) {
     p->quiet = 0U;
   } else if (p->quiet < d->cfg.sym_off_steps) {
     p->quiet++;
   } else {
     p->quiet = d->cfg.sym_off_steps; /* settled (also from pers_clear) */
+  }
+}
+
+/* A persistence at rest on "absent": a step that reads absent again leaves
+ * it as it is (pers_step would only rewrite the same values). */
+static bool pers_at_rest(const canfdi_diagnosis_pers_t *p)
+{
+  return (p->state == CANFDI_DIAG_SYM_ZERO) && (p->cand == CANFDI_DIAG_SYM_ZERO) && (p->n == 0U);
+}
+
+static void channel(canfdi_diagnosis_t *d, uint32_t c, uint32_t j, int32_t x, bool valid)
+{
+  canfdi_diagnosis_pers_t *p = &d->ch[c][j];
+  d->x_q16[c][j] = valid ? x : 0;
+  if (valid && pers_at_rest(p) && (p->quiet == d->cfg.sym_off_steps) && (abs_sat(x) < d->cfg.off_q16)) {
+    /* settled and below the zero level again: nothing changes (the
+     * ternary reads absent, the persistence rests, quiet stays settled);
+     * the common case of every step */
+  } else {
+    pers_step(p, valid, ternary(d, x, p->state), d->cfg.sym_on_steps, d->cfg.sym_off_steps);
+    channel_quiet(d, p, x, valid);
   }
 }
 
@@ -470,8 +490,11 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
   channel(d, CANFDI_DIAG_COMP_THR, 8U, 0, false);
   channel(d, CANFDI_DIAG_COMP_THR, 9U, 0, false);
   for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
-    const int8_t t = ((s->flags & ((uint32_t)1U << i)) != 0U) ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO;
-    pers_step(&d->flag[i], true, t, d->cfg.flag_on_steps, d->cfg.flag_off_steps);
+    const bool on = (s->flags & ((uint32_t)1U << i)) != 0U;
+    if (on || !pers_at_rest(&d->flag[i])) {
+      pers_step(&d->flag[i], true, on ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO, d->cfg.flag_on_steps,
+                d->cfg.flag_off_steps);
+    }
   }
 }
 
