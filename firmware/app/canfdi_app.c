@@ -487,9 +487,12 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     stage_detect(app);                 /* 4. */
     stage_diagnose(app);               /* 5. */
     if (app->slot == CANFDI_APP_SLOT_DIAG) {
-      /* 6. in its slot of the rate schedule (canfdi_app.h); between its
-       * runs its verdicts hold */
+      /* 6. the full diagnosis in its slot of the rate schedule
+       * (canfdi_app.h); the hard rules in every other step, the model
+       * rules' verdicts held between full steps */
       canfdi_diagnosis_step(&app->diagnosis, &app->sym, app->report);
+    } else {
+      canfdi_diagnosis_step_hard(&app->diagnosis, &app->sym, app->report);
     }
     stage_dtc(app);                    /* 7. */
     stage_manage(app, u_dcm, u_thr);   /* 8. */

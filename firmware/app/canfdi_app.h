@@ -132,34 +132,21 @@
  * jittered steps) run on QEMU; 304 inputs, 121 725 steps: at most 39 547
  * (M4) / 76 433 (M0), rejected and implausible input costs less than the
  * models running on valid data.
- * Rate schedule (started, not finished; docs/porting.md): a 10 ms frame of
+ * Rate schedule (docs/architecture.md, "Rate schedule"): a 10 ms frame of
  * CANFDI_APP_FRAME_SLOTS 1 ms slots (app->slot). Every step: input
  * supervision, vote, control, gates, parity residuals and the estimators'
  * SVFs (their RLS updates decimated inside the modules: est_dcm electrical
  * at phase 0, mechanical at 1 of 5; est_thr electrical / mechanical on
  * alternate steps), actuator monitors, symptom vector (its filters are
- * 1 ms filters), DTC routing (it takes one-step events: a rejected frame,
- * a timeout, the manager's findings), actuator manager, outputs, server.
- * In slot CANFDI_APP_SLOT_DIAG of every cal.diag_period_steps: the
- * diagnosis (stage 6), its persistence counts converted from 1 ms steps at
- * init (rounded up); between its runs its verdicts hold.
- * The default is diag_period_steps = 1 (every step, bit-identical to the
- * unscheduled step) because at 2 and at 10 two throttle parameter faults
- * are no longer named (tests/sil/scenarios/thr_friction_up.scn P0638,
- * thr_spring_weak.scn P1B10: never seen). Measured with 10 (`make
- * pil-test`, M4): min/mean/max 24 300 / 30 700 / 46 600 on dcm_ia_offset
- * (was 28 300 / 38 200 / 46 400): the mean falls by ~7 k, the worst tick
- * does not (the diagnosis slot carries it). Profile of the step (host
- * callgrind, -Os -fno-inline, dcm_ia_offset): detection 53 % (SVF steps
- * 26 %, parity_dcm 20 %, parity_thr 13 %, est_thr 13 %, est_dcm 5 %),
- * symptoms + diagnosis + DTC routing 28 % (diagnosis 12 %, dtcroute 9.5 %,
- * symptoms 6 %), outputs 7 %, control 4 %. What the budget (<= 20 000 M4,
- * <= 24 000 M0 in the worst tick) still needs: the SVFs (26 %, every step)
- * and the parity residuals cheaper or decimated, the RLS updates of both
- * estimators in distinct slots (est_thr has one in every step today), the
- * diagnosis and the symptom vector split over slots of their own; M0 runs
- * ~2x the M4 count, so 24 000 there needs the base cost (today >= 52 000)
- * more than halved, not only spread.
+ * 1 ms filters), the diagnosis' flags, symptom persistence and hard rules
+ * (canfdi_diagnosis_step_hard), DTC routing (it takes one-step events: a
+ * rejected frame, a timeout, the manager's findings), actuator manager,
+ * outputs, server. In slot CANFDI_APP_SLOT_DIAG of every
+ * cal.diag_period_steps (default 10): the model rules' matching
+ * (canfdi_diagnosis_step), its isolation count converted from 1 ms steps
+ * at init (rounded up); between its runs its verdicts hold. A model-based
+ * fault is named up to one period later than unscheduled; the hard rules'
+ * faults at the same step.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
  * all of the application's RAM, static: 11 272 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration

@@ -125,8 +125,8 @@ void canfdi_app_default_cal(canfdi_app_cal_t *cal)
     /* RAX's "nothing to explain" waits for r1's symptom to clear */
     cal->sym.rax_quiet_steps = cal->diagnosis.sym_off_steps;
     canfdi_dtcroute_default_cfg(&cal->dtcroute);
-    /* the diagnosis every step until its throttle parameter isolation holds
-     * at 10 ms (canfdi_app.h, the rate schedule) */
-    cal->diag_period_steps = 1U;
+    /* the model rules' matching every 10 ms (canfdi_app.h, the rate
+     * schedule) */
+    cal->diag_period_steps = 10U;
   }
 }

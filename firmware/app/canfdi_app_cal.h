@@ -60,9 +60,11 @@ typedef struct {
   canfdi_diagnosis_cfg_t diagnosis;
   canfdi_dtcroute_cfg_t dtcroute;
   uint8_t diag_period_steps;       /* the rate schedule (canfdi_app.h): the
-                                    * diagnosis runs every diag_period_steps
-                                    * 1 ms steps, 1..10; its step counts stay
-                                    * given in 1 ms steps (converted at init) */
+                                    * model rules' matching runs every
+                                    * diag_period_steps 1 ms steps, 1..10
+                                    * (1: every step, the unscheduled
+                                    * diagnosis); isolate_steps stays given
+                                    * in 1 ms steps (converted at init) */
   canfdi_uds_cfg_t uds;            /* the diagnostic server (limp-home angle from ctrl_thr) */
   uint16_t rearm_steps;            /* a plant's model rules held this many 1 ms
                                     * steps after its inputs came back from an

@@ -13,8 +13,9 @@
 #include "app/canfdi_app.h"
 
 /* A count of 1 ms steps as a count of calls every period steps (rounded
- * up, at least 1): the persistence the diagnosis and the DTC bookkeeping
- * were calibrated for, at their scheduled rate. */
+ * up, at least 1): the isolation's consecutive wins, calibrated in 1 ms
+ * steps, at the rate of the full diagnosis steps (the symptoms' and flags'
+ * persistence runs in every step). */
 static uint16_t per_period(uint16_t steps, uint8_t period)
 {
   const uint32_t n = ((uint32_t)steps + (uint32_t)period - 1U) / (uint32_t)period;
@@ -30,10 +31,6 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
   if ((period < 1U) || (period > CANFDI_APP_FRAME_SLOTS)) {
     rc = -CANFDI_EINVAL;
   } else {
-    dc.sym_on_steps = per_period(dc.sym_on_steps, period);
-    dc.sym_off_steps = per_period(dc.sym_off_steps, period);
-    dc.flag_on_steps = per_period(dc.flag_on_steps, period);
-    dc.flag_off_steps = per_period(dc.flag_off_steps, period);
     dc.isolate_steps = per_period(dc.isolate_steps, period);
   }
   app->slot = 0U;

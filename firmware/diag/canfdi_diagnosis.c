@@ -20,9 +20,9 @@ CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_RULES <= 32U, rules_fit_the_gate_mask);
 
 /* Most steps a low flux-loss prediction adds to a residual's hold (the
  * parity's load tracking time, 1 s). */
-#define FX_LOW_MAX 1000U
 
 /* Test verdicts while combining a hard and a model rule of one fault. */
+#define FX_LOW_MAX 1000U
 #define V_NA 0U   /* no such test */
 #define V_NONE 1U /* not tested */
 #define V_PASS 2U
@@ -151,6 +151,9 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
       d->latched[c] = false;
       d->fresh[c][0] = 0U;
       d->fresh[c][1] = 0U;
+    }
+    for (j = 0U; j < CANFDI_FAULT_COUNT; j++) {
+      d->mv_last[j] = V_NA;
     }
     for (j = 0U; j < CANFDI_DIAG_N_FLAGS; j++) {
       pers_clear(&d->flag[j], CANFDI_DIAG_SYM_ZERO);
@@ -489,6 +492,12 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
             d->cfg.sym_on_steps, d->cfg.sym_off_steps);
   channel(d, CANFDI_DIAG_COMP_THR, 8U, 0, false);
   channel(d, CANFDI_DIAG_COMP_THR, 9U, 0, false);
+}
+
+/* The flags' persistence: every step (full or hard rules only). */
+static void update_flags(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
+{
+  uint32_t i;
   for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
     const bool on = (s->flags & ((uint32_t)1U << i)) != 0U;
     if (on || !pers_at_rest(&d->flag[i])) {
@@ -849,6 +858,15 @@ static void component_phase(canfdi_diagnosis_t *d, verdicts_t *v)
   }
 }
 
+/* P2135's input: a persistent TPS disagreement (CORR) that no hard rule
+ * and no model rule of the throttle explains. */
+static void corr_phase(canfdi_diagnosis_t *d, const verdicts_t *v)
+{
+  d->corr_not_isolated = !v->hard_any[CANFDI_DIAG_COMP_THR] && (d->res[CANFDI_DIAG_COMP_THR].isolated == 0U) &&
+                         ((d->ch[CANFDI_DIAG_COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_POS) ||
+                          (d->ch[CANFDI_DIAG_COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_NEG));
+}
+
 /* Phase 3: one report per fault; FAILED if either test failed, PASSED only
  * if every test it has ran and passed. */
 static void report_phase(canfdi_diagnosis_t *d, const verdicts_t *v, int8_t report[])
@@ -887,6 +905,7 @@ void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     verdicts_t v;
     uint32_t i;
     canfdi_count_inc(&d->diag.steps);
+    update_flags(d, s);
     update_channels(d, s);
     for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
       v.hv[i] = V_NA;
@@ -897,9 +916,51 @@ void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     }
     hard_phase(s, flags_now(d), &v);
     component_phase(d, &v);
-    d->corr_not_isolated = !v.hard_any[CANFDI_DIAG_COMP_THR] && (d->res[CANFDI_DIAG_COMP_THR].isolated == 0U) &&
-                           ((d->ch[CANFDI_DIAG_COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_POS) ||
-                            (d->ch[CANFDI_DIAG_COMP_THR][CANFDI_SYM_THR_CORR].state == CANFDI_DIAG_SYM_NEG));
+    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+      d->mv_last[i] = v.mv[i];
+    }
+    corr_phase(d, &v);
+    report_phase(d, &v, report);
+  }
+}
+
+void canfdi_diagnosis_step_hard(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
+{
+  if ((d == NULL) || !d->initialised || (s == NULL)) {
+    if ((d != NULL) && d->initialised) {
+      canfdi_count_inc(&d->diag.rejected);
+    }
+    if (report != NULL) {
+      fill_none(report);
+    }
+  } else {
+    verdicts_t v;
+    uint32_t i;
+    uint32_t c;
+    canfdi_count_inc(&d->diag.steps);
+    update_flags(d, s);
+    update_channels(d, s);
+    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+      v.hv[i] = V_NA;
+      v.mv[i] = d->mv_last[i];
+    }
+    for (i = 0U; i < CANFDI_DIAG_N_COMP; i++) {
+      v.hard_any[i] = false;
+    }
+    hard_phase(s, flags_now(d), &v);
+    for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+      canfdi_diagnosis_result_t *res = &d->res[c];
+      const uint8_t prev_isolated = res->isolated;
+      if (v.hard_any[c]) {
+        const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (v.hv[prev_isolated] == V_FAIL);
+        res->detected = true;
+        component_hard(d, c, prev_hard, &v);
+        for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+          d->mv_last[i] = v.mv[i]; /* the component's model verdicts are NONE until the next full step */
+        }
+      }
+    }
+    corr_phase(d, &v);
     report_phase(d, &v, report);
   }
 }

@@ -374,6 +374,7 @@ typedef struct {
   bool held[CANFDI_DIAG_N_COMP]; /* this step the component's model rules are
                                   * not tested: DC motor CANFDI_SYM_F_DCM_UNLEARNT
                                   * or _DCM_REARM, throttle _THR_REARM */
+  uint8_t mv_last[CANFDI_FAULT_COUNT]; /* model verdicts of the last full step */
   bool corr_not_isolated;
   bool initialised;
   uint32_t failed_mask; /* bit i: fault i FAILED this step */
@@ -415,6 +416,21 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d);
  * or unbound d or a NULL s; NULL report: nothing written).
  */
 void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[]);
+
+/*
+ * A step without the model rules' matching, between full steps (the
+ * application's rate schedule, app/canfdi_app.h): the flags' and the
+ * symptom channels' persistence and the hard rules on this step's symptom
+ * vector, as in a full step; the model rules' matching, results and
+ * verdicts are those of the last full step (its model verdicts reported
+ * again), except that a hard rule firing in a component clears the
+ * component's result and model verdicts as a full step would. Symptoms
+ * thus persist in 1 ms steps whatever the schedule; only the isolation
+ * (isolate_steps consecutive wins) counts full steps. A schedule that
+ * makes every step full is the unscheduled diagnosis. Cost: the
+ * persistence, the hard rules and the report, without the matching.
+ */
+void canfdi_diagnosis_step_hard(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[]);
 
 /*
  * The fault isolated now in `component` (CANFDI_COMPONENT_DC_MOTOR or

@@ -224,6 +224,112 @@ START_TEST(test_isolates_each_fault)
 }
 END_TEST
 
+/* ---- the rate schedule: matching every 10 steps ---------------------------- */
+
+#define SCHED_PERIOD 10U
+
+/* Step k of a schedule with the model rules' matching every SCHED_PERIOD
+ * steps (the application's, app/canfdi_app.h), in slot 0. */
+static void step_sched(uint32_t k, const canfdi_symptoms_t *s)
+{
+  if ((k % SCHED_PERIOD) == 0U) {
+    canfdi_diagnosis_step(&dg, s, rep);
+  } else {
+    canfdi_diagnosis_step_hard(&dg, s, rep);
+  }
+}
+
+static void setup_sched(void)
+{
+  canfdi_diagnosis_default_cfg(&cfg);
+  /* the application's conversion: consecutive wins in full steps */
+  cfg.isolate_steps = (uint16_t)((cfg.isolate_steps + SCHED_PERIOD - 1U) / SCHED_PERIOD);
+  ck_assert_int_eq(canfdi_diagnosis_init(&dg, &cfg), CANFDI_OK);
+}
+
+/* Every fault is isolated under the schedule as without it, no later than
+ * the unscheduled latency plus one period per decision (the symptoms
+ * persist in 1 ms steps; the wins are counted in full steps), and its
+ * verdict is held between full steps; a hard-rule fault no later than
+ * unscheduled (its flags are judged every step). */
+START_TEST(test_isolates_each_fault_scheduled)
+{
+  const vec_t *v = &vecs[_i];
+  canfdi_symptoms_t s;
+  uint32_t k;
+  uint32_t first = UINT32_MAX;
+  uint32_t first_1ms = UINT32_MAX;
+  setup();
+  for (k = 0U; k < 2000U; k++) {
+    build(&s, (k < 1000U) ? &fault_free : v, 0.3, 0.002);
+    canfdi_diagnosis_step(&dg, &s, rep);
+    if ((k >= 1000U) && (rep[v->fault] == CANFDI_DIAG_REPORT_FAILED) && (first_1ms == UINT32_MAX)) {
+      first_1ms = k - 1000U;
+    }
+  }
+  setup_sched();
+  for (k = 0U; k < 2000U; k++) {
+    build(&s, (k < 1000U) ? &fault_free : v, 0.3, 0.002);
+    step_sched(k, &s);
+    if (k < 1000U) {
+      ck_assert_uint_eq(count_failed(), 0U);
+    } else if ((rep[v->fault] == CANFDI_DIAG_REPORT_FAILED) && (first == UINT32_MAX)) {
+      first = k - 1000U;
+    } else if (first != UINT32_MAX) {
+      ck_assert_msg(rep[v->fault] == CANFDI_DIAG_REPORT_FAILED, "%s: lost at step %u", v->name, k);
+      ck_assert_msg(count_failed() == 1U, "%s: %u faults FAILED at step %u", v->name, count_failed(), k);
+    } else {
+      /* not yet */
+    }
+  }
+  ck_assert_msg(first != UINT32_MAX, "%s: never isolated under the schedule", v->name);
+  ck_assert_uint_ne(first_1ms, UINT32_MAX);
+  if ((v->flags & ~(uint32_t)F_UAC) != 0U) {
+    /* a hard rule: judged in every step, never later than unscheduled */
+    ck_assert_msg(first <= first_1ms, "%s: hard rule at %u, unscheduled %u", v->name, first, first_1ms);
+  } else {
+    ck_assert_msg(first <= first_1ms + (2U * SCHED_PERIOD), "%s: at %u, unscheduled %u", v->name, first,
+                  first_1ms);
+  }
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, v->component, NULL), v->fault);
+}
+END_TEST
+
+/* A hard rule that fires between full steps clears the component's model
+ * verdicts at once, as a full step would: the isolated model fault is no
+ * longer reported FAILED in the step the bridge flag qualifies. */
+START_TEST(test_hard_between_full_steps)
+{
+  canfdi_symptoms_t s;
+  uint32_t k;
+  setup_sched();
+  for (k = 0U; k < 400U; k++) {
+    build(&s, &vecs[6], 0.3, 0.002);
+    step_sched(k, &s);
+  }
+  ck_assert_uint_eq(count_failed(), 1U);
+  ck_assert_int_eq(rep[vecs[6].fault], CANFDI_DIAG_REPORT_FAILED);
+  /* the flag qualifies in its flag_on_steps-th step: one of the hard rules */
+  ck_assert_uint_ne((403U + cfg.flag_on_steps - 1U) % SCHED_PERIOD, 0U);
+  for (k = 400U; k < 403U; k++) {
+    build(&s, &vecs[6], 0.3, 0.002);
+    step_sched(k, &s);
+  }
+  for (k = 403U; k < 403U + cfg.flag_on_steps; k++) {
+    build(&s, &vecs[6], 0.3, 0.002);
+    s.flags |= CANFDI_SYM_F_BRIDGE_A_DEAD;
+    step_sched(k, &s);
+    if (k + 1U < 403U + cfg.flag_on_steps) {
+      ck_assert_int_eq(rep[vecs[6].fault], CANFDI_DIAG_REPORT_FAILED); /* held until then */
+    }
+  }
+  ck_assert_int_eq(rep[CANFDI_FAULT_DCM_BRIDGE_A_DEAD], CANFDI_DIAG_REPORT_FAILED);
+  ck_assert_int_eq(rep[vecs[6].fault], CANFDI_DIAG_REPORT_NONE);
+  ck_assert_uint_eq(count_failed(), 1U);
+  ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, DCM, NULL), CANFDI_FAULT_DCM_BRIDGE_A_DEAD);
+}
+END_TEST
+
 /* Every non-communication fault id appears in the vector table. */
 START_TEST(test_catalogue_covered)
 {
@@ -875,6 +981,8 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_flux_sign_contra);
   tcase_add_test(tc, test_unlearnt_tests_nothing);
   tcase_add_test(tc, test_rearm_holds_one_component);
+  tcase_add_loop_test(tc, test_isolates_each_fault_scheduled, 0, (int)N_VECS);
+  tcase_add_test(tc, test_hard_between_full_steps);
   tcase_add_test(tc, test_gain_contra_rules_gain_out);
   tcase_add_test(tc, test_band_is_not_zero);
   suite_add_tcase(s, tc);
