@@ -31,6 +31,19 @@
 #define CANFDI_ASSERT(x) ((void)0)
 #endif
 
+/*
+ * A small helper of the 1 ms path that is always expanded in place: at -Os
+ * GCC keeps many static inline functions out of line, and a call then
+ * costs more than the helper's own few instructions. Only for functions of
+ * a handful of instructions (the flash each copy costs is stated where it
+ * is used). Plain inline for compilers without the attribute.
+ */
+#if defined(__GNUC__)
+#define CANFDI_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define CANFDI_ALWAYS_INLINE inline
+#endif
+
 /* Compile-time assertion usable in C99, at file scope only (at block scope
  * the typedef trips -Wunused-local-typedefs). */
 #define CANFDI_STATIC_ASSERT(cond, msg) typedef char canfdi_static_assert_##msg[(cond) ? 1 : -1]

@@ -25,7 +25,7 @@
 #include "core/canfdi_common.h"
 
 /* *c += 1, saturating at UINT32_MAX. */
-static inline void canfdi_count_inc(uint32_t *c)
+static CANFDI_ALWAYS_INLINE void canfdi_count_inc(uint32_t *c)
 {
   CANFDI_ASSERT(c != NULL);
   if (*c < UINT32_MAX) {

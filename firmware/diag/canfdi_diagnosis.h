@@ -219,7 +219,7 @@
  * cycles; ~0.15 ms at 48 MHz for 7 k.) Code: 3.7 kB (M0+), 3.5 kB (M4),
  * ROM tables included. Stack (-fstack-usage, M0+): step 176 bytes plus a
  * 40-byte callee.
- * Memory: sizeof(canfdi_diagnosis_t) = 776 bytes on a 32-bit target (the
+ * Memory: sizeof(canfdi_diagnosis_t) = 808 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag
  * persistence, the normalised values, the compiled rules, the weights, the
  * results, the flux gate's counters, the diagnostics and the state). No heap, no globals besides const tables, no

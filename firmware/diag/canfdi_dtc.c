@@ -100,7 +100,7 @@ const canfdi_dtc_def_t canfdi_dtc_defaults[CANFDI_DTC_COUNT] = {
 
 /* ------------------------------------------------------------ helpers */
 
-static bool bound(const canfdi_dtc_t *m)
+static CANFDI_ALWAYS_INLINE bool bound(const canfdi_dtc_t *m)
 {
   return (m != NULL) && (m->table != NULL);
 }

@@ -15,6 +15,7 @@ void canfdi_est_dcm_default_cfg(canfdi_est_dcm_cfg_t *cfg)
   CANFDI_ASSERT(cfg != NULL);
   cfg->svf.order = 2U;
   cfg->svf.omega_c_rad_s = 200;
+  cfg->svf.outputs = 0U; /* each filter's own set at init */
   cfg->decim = 5U;
   cfg->forget_q31 = CANFDI_Q31_RATIO(1, 100);
   cfg->p0_q16 = 100 * CANFDI_Q16_ONE;
@@ -61,6 +62,15 @@ static void seed_nominal(canfdi_est_dcm_t *e)
   canfdi_rls_set_theta_qn(&e->mech, 2U, canfdi_div_s32_qn(c->mc_nom_q16, c->psi_nom_q16, 16U), 16U);
 }
 
+/* One of the estimator's filters, with the shared configuration and the
+ * outputs this module reads of it. */
+static int32_t svf_init_outputs(canfdi_svf_t *f, const canfdi_svf_cfg_t *shared, unsigned outputs)
+{
+  canfdi_svf_cfg_t c = *shared;
+  c.outputs = (uint8_t)outputs;
+  return canfdi_svf_init(f, &c);
+}
+
 int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg)
 {
   int32_t out = -CANFDI_EINVAL;
@@ -81,10 +91,10 @@ int32_t canfdi_est_dcm_init(canfdi_est_dcm_t *e, const canfdi_est_dcm_cfg_t *cfg
     rm.phi_shift[2] = 0;
     rm.excite_mask = 0x3U; /* dw/dt and w; not the constant */
     rm.excite_min_q16 = cfg->excite_min_mech_q16;
-    if ((canfdi_svf_init(&e->svf_u, &cfg->svf) == CANFDI_OK) &&
-        (canfdi_svf_init(&e->svf_i, &cfg->svf) == CANFDI_OK) &&
-        (canfdi_svf_init(&e->svf_w, &cfg->svf) == CANFDI_OK) &&
-        (canfdi_svf_init(&e->svf_l, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->arm, &ra) == CANFDI_OK) &&
+    if ((svf_init_outputs(&e->svf_u, &cfg->svf, CANFDI_SVF_OUT_Y | CANFDI_SVF_OUT_DY) == CANFDI_OK) &&
+        (svf_init_outputs(&e->svf_i, &cfg->svf, CANFDI_SVF_OUT_Y | CANFDI_SVF_OUT_DY) == CANFDI_OK) &&
+        (svf_init_outputs(&e->svf_w, &cfg->svf, CANFDI_SVF_OUT_Y | CANFDI_SVF_OUT_DY) == CANFDI_OK) &&
+        (svf_init_outputs(&e->svf_l, &cfg->svf, CANFDI_SVF_OUT_Y) == CANFDI_OK) && (canfdi_rls_init(&e->arm, &ra) == CANFDI_OK) &&
         (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
       e->cfg = *cfg;
       e->has_run = false;

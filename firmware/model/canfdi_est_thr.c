@@ -16,6 +16,7 @@ void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
   CANFDI_ASSERT(cfg != NULL);
   cfg->svf.order = 3U;
   cfg->svf.omega_c_rad_s = 300;
+  cfg->svf.outputs = 0U; /* each filter's own set at init */
   cfg->decim = 2U;
   cfg->forget_q31 = CANFDI_Q31_RATIO(5, 1000);
   cfg->mech_forget_q31 = CANFDI_Q31_RATIO(5, 10000);
@@ -138,6 +139,15 @@ static void seed_nominal(canfdi_est_thr_t *e)
   canfdi_rls_set_theta_qn(&e->mech, 4U, canfdi_div_s32_qn(c->friction_nom_q16, c->k_nom_q16, 16U), 16U);
 }
 
+/* One of the estimator's filters, with the shared configuration and the
+ * outputs this module reads of it. */
+static int32_t svf_init_outputs(canfdi_svf_t *f, const canfdi_svf_cfg_t *shared, unsigned outputs)
+{
+  canfdi_svf_cfg_t c = *shared;
+  c.outputs = (uint8_t)outputs;
+  return canfdi_svf_init(f, &c);
+}
+
 int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg)
 {
   int32_t out = -CANFDI_EINVAL;
@@ -163,10 +173,10 @@ int32_t canfdi_est_thr_init(canfdi_est_thr_t *e, const canfdi_est_thr_cfg_t *cfg
     rm.phi_shift[3] = 0;
     rm.phi_shift[4] = 0;
     rm.excite_mask = 0x6U; /* dtheta/dt and theta: sustained motion */
-    if ((canfdi_svf_init(&e->svf_u, &cfg->svf) == CANFDI_OK) &&
-        (canfdi_svf_init(&e->svf_i, &cfg->svf) == CANFDI_OK) &&
-        (canfdi_svf_init(&e->svf_a, &cfg->svf) == CANFDI_OK) &&
-        (canfdi_svf_init(&e->svf_s, &cfg->svf) == CANFDI_OK) && (canfdi_rls_init(&e->el, &re) == CANFDI_OK) &&
+    if ((svf_init_outputs(&e->svf_u, &cfg->svf, CANFDI_SVF_OUT_Y | CANFDI_SVF_OUT_DY) == CANFDI_OK) &&
+        (svf_init_outputs(&e->svf_i, &cfg->svf, CANFDI_SVF_OUT_Y | CANFDI_SVF_OUT_DY) == CANFDI_OK) &&
+        (svf_init_outputs(&e->svf_a, &cfg->svf, CANFDI_SVF_OUT_ALL) == CANFDI_OK) &&
+        (svf_init_outputs(&e->svf_s, &cfg->svf, CANFDI_SVF_OUT_Y) == CANFDI_OK) && (canfdi_rls_init(&e->el, &re) == CANFDI_OK) &&
         (canfdi_rls_init(&e->mech, &rm) == CANFDI_OK)) {
       e->cfg = *cfg;
       e->has_run = false;

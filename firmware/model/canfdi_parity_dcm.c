@@ -236,11 +236,14 @@ int32_t canfdi_parity_dcm_init(canfdi_parity_dcm_t *p, const canfdi_parity_dcm_c
     unsigned k;
     sc.order = 3U;
     sc.omega_c_rad_s = cfg->omega_c_rad_s;
-    /* cfg was checked: none of these can fail. */
+    /* cfg was checked: none of these can fail. Each filter computes the
+     * outputs the residuals read. */
+    sc.outputs = (uint8_t)(CANFDI_SVF_OUT_Y | CANFDI_SVF_OUT_DY);
     out = canfdi_svf_init(&p->svf_u, &sc);
+    out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_z, &sc) : out;
+    sc.outputs = CANFDI_SVF_OUT_ALL;
     out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_i, &sc) : out;
     out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_w, &sc) : out;
-    out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_z, &sc) : out;
     for (k = 0U; (out == CANFDI_OK) && (k < CANFDI_PARITY_DCM_N_RES); k++) {
       out = canfdi_adapt_init(&p->thr[k], &cfg->band[k]);
     }

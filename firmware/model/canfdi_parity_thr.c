@@ -191,8 +191,12 @@ int32_t canfdi_parity_thr_init(canfdi_parity_thr_t *p, const canfdi_parity_thr_c
     unsigned k;
     sc.order = 3U;
     sc.omega_c_rad_s = cfg->omega_c_rad_s;
+    /* each filter computes the outputs the residuals read */
+    sc.outputs = CANFDI_SVF_OUT_Y;
     out = canfdi_svf_init(&p->svf_u, &sc);
+    sc.outputs = (uint8_t)(CANFDI_SVF_OUT_Y | CANFDI_SVF_OUT_DY);
     out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_i, &sc) : out;
+    sc.outputs = CANFDI_SVF_OUT_DY;
     out = (out == CANFDI_OK) ? canfdi_svf_init(&p->svf_th, &sc) : out;
     out = (out == CANFDI_OK) ? canfdi_tps_init(&p->tps[0], &cfg->tps1) : out;
     out = (out == CANFDI_OK) ? canfdi_tps_init(&p->tps[1], &cfg->tps2) : out;

@@ -62,7 +62,7 @@ int32_t canfdi_svf_init(canfdi_svf_t *f, const canfdi_svf_cfg_t *cfg)
 {
   int32_t out = -CANFDI_EINVAL;
   if ((f != NULL) && (cfg != NULL) && ((cfg->order == 2U) || (cfg->order == 3U)) &&
-      (cfg->omega_c_rad_s >= 1) && (cfg->omega_c_rad_s <= 32767)) {
+      ((cfg->outputs & ~CANFDI_SVF_OUT_ALL) == 0U) && (cfg->omega_c_rad_s >= 1) && (cfg->omega_c_rad_s <= 32767)) {
     uint64_t p = (uint64_t)cfg->omega_c_rad_s * (uint64_t)CANFDI_CFG_STEP_US;
     uint64_t q = SVF_H_DEN;
     const uint64_t g = svf_gcd_u64(p, q);
@@ -95,6 +95,9 @@ int32_t canfdi_svf_init(canfdi_svf_t *f, const canfdi_svf_cfg_t *cfg)
         a[2][2] = qi * qi;
       }
       f->cfg = *cfg;
+      if (f->cfg.outputs == 0U) {
+        f->cfg.outputs = CANFDI_SVF_OUT_ALL;
+      }
       for (i = 0U; i < CANFDI_SVF_MAX_ORDER; i++) {
         for (j = 0U; j < CANFDI_SVF_MAX_ORDER; j++) {
           f->g_q31[i][j] = (a[i][j] == 0) ? 0 : svf_ratio_q31(pi * a[i][j], den);
@@ -237,27 +240,33 @@ void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16)
     d2 = n2;
   }
   f->u_prev_q16 = x_q16;
-  f->y_q16 = svf_out_k0(f->v_q32[0], &f->diag.out_saturations);
-  f->dy_q16 = svf_out_k1(f->v_q32[1], wc, &f->diag.out_saturations);
-  f->d2y_q16 = svf_out_k2(d2, wc, &f->diag.out_saturations);
+  if ((f->cfg.outputs & CANFDI_SVF_OUT_Y) != 0U) {
+    f->y_q16 = svf_out_k0(f->v_q32[0], &f->diag.out_saturations);
+  }
+  if ((f->cfg.outputs & CANFDI_SVF_OUT_DY) != 0U) {
+    f->dy_q16 = svf_out_k1(f->v_q32[1], wc, &f->diag.out_saturations);
+  }
+  if ((f->cfg.outputs & CANFDI_SVF_OUT_D2Y) != 0U) {
+    f->d2y_q16 = svf_out_k2(d2, wc, &f->diag.out_saturations);
+  }
   canfdi_count_inc(&f->diag.steps);
 }
 
 int32_t canfdi_svf_y_q16(const canfdi_svf_t *f)
 {
-  CANFDI_ASSERT(f != NULL);
+  CANFDI_ASSERT((f != NULL) && ((f->cfg.outputs & CANFDI_SVF_OUT_Y) != 0U));
   return f->y_q16;
 }
 
 int32_t canfdi_svf_dy_q16(const canfdi_svf_t *f)
 {
-  CANFDI_ASSERT(f != NULL);
+  CANFDI_ASSERT((f != NULL) && ((f->cfg.outputs & CANFDI_SVF_OUT_DY) != 0U));
   return f->dy_q16;
 }
 
 int32_t canfdi_svf_d2y_q16(const canfdi_svf_t *f)
 {
-  CANFDI_ASSERT(f != NULL);
+  CANFDI_ASSERT((f != NULL) && ((f->cfg.outputs & CANFDI_SVF_OUT_D2Y) != 0U));
   return f->d2y_q16;
 }
 

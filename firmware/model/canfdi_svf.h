@@ -59,7 +59,7 @@
  * diag.out_saturations.
  *
  * Domain of the configuration (init returns -CANFDI_EINVAL otherwise):
- *   order 2 or 3; omega_c_rad_s >= 1 (integer rad/s) with h = wc T / 2 <= 1,
+ *   order 2 or 3; outputs within CANFDI_SVF_OUT_ALL; omega_c_rad_s >= 1 (integer rad/s) with h = wc T / 2 <= 1,
  *   i.e. wc <= 2000 rad/s at T = 1 ms (about 2/3 of the Nyquist frequency
  *   pi / T; near it Tustin's frequency warping dominates);
  *   wc <= 32767; and, with h = p / q reduced to lowest terms,
@@ -88,8 +88,19 @@
 /* Largest supported order. */
 #define CANFDI_SVF_MAX_ORDER 3U
 
+/* The outputs a step computes (canfdi_svf_cfg_t.outputs). */
+#define CANFDI_SVF_OUT_Y 0x01U
+#define CANFDI_SVF_OUT_DY 0x02U
+#define CANFDI_SVF_OUT_D2Y 0x04U
+#define CANFDI_SVF_OUT_ALL 0x07U
+
 typedef struct {
   uint8_t order;         /* 2 or 3 */
+  uint8_t outputs;       /* CANFDI_SVF_OUT_* the caller reads; 0 means all.
+                          * A step computes only these (the states always):
+                          * an output is a rounding, clamps and up to two
+                          * 64-bit products, and most users read two of
+                          * the three */
   int32_t omega_c_rad_s; /* corner frequency wc, integer rad/s, 1..2000 at 1 ms */
 } canfdi_svf_cfg_t;
 
@@ -136,7 +147,9 @@ void canfdi_svf_reset(canfdi_svf_t *f, int32_t x0_q16);
 void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16);
 
 /* Outputs after the last step (or reset): filtered signal (same unit), first
- * derivative (unit/s) and second derivative (unit/s^2), all Q16.16.
+ * derivative (unit/s) and second derivative (unit/s^2), all Q16.16. Only
+ * the outputs of cfg.outputs are computed: reading another is an invariant
+ * violation (CANFDI_ASSERT; it reads the value of the last reset).
  * Cost: a load each. */
 int32_t canfdi_svf_y_q16(const canfdi_svf_t *f);
 int32_t canfdi_svf_dy_q16(const canfdi_svf_t *f);

@@ -316,6 +316,7 @@ static void guard_svf(void)
   const canfdi_svf_diag_t *d;
 
   cfg.order = (uint8_t)in_n;
+  cfg.outputs = (uint8_t)in_s32[1];
   cfg.omega_c_rad_s = in_s32[0];
   sink32(canfdi_svf_init(&svf, &cfg));
   canfdi_svf_reset(&svf, in_s32[1]);

@@ -66,7 +66,7 @@ START_TEST(test_cfg_domain)
 {
   const cfg_case_t *c = &cfg_cases[_i];
   canfdi_svf_t f;
-  canfdi_svf_cfg_t cfg = {c->order, c->wc};
+  canfdi_svf_cfg_t cfg = {.order = c->order, .omega_c_rad_s = c->wc};
   ck_assert_int_eq(canfdi_svf_init(&f, &cfg), c->expect);
 }
 END_TEST
@@ -74,7 +74,7 @@ END_TEST
 START_TEST(test_null_args)
 {
   canfdi_svf_t f;
-  canfdi_svf_cfg_t cfg = {3U, 100};
+  canfdi_svf_cfg_t cfg = {.order = 3U, .omega_c_rad_s = 100};
   ck_assert_int_eq(canfdi_svf_init(NULL, &cfg), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_svf_init(&f, NULL), -CANFDI_EINVAL);
 }
@@ -92,7 +92,7 @@ static const fcfg_t fcfgs[] = {{2U, 20}, {2U, 100}, {2U, 800}, {3U, 20}, {3U, 10
 
 static void init_or_fail(canfdi_svf_t *f, uint8_t order, int32_t wc)
 {
-  canfdi_svf_cfg_t cfg = {order, wc};
+  canfdi_svf_cfg_t cfg = {.order = order, .omega_c_rad_s = wc};
   ck_assert_int_eq(canfdi_svf_init(f, &cfg), CANFDI_OK);
 }
 
@@ -423,12 +423,47 @@ START_TEST(test_counters_saturate)
 }
 END_TEST
 
+/* A filter that computes a subset of the outputs computes them exactly as
+ * one that computes all three, and leaves the others at their reset
+ * value; an unknown output bit is refused. */
+START_TEST(test_output_subset)
+{
+  const fcfg_t *c = &fcfgs[_i];
+  unsigned mask;
+  for (mask = 1U; mask <= CANFDI_SVF_OUT_ALL; mask++) {
+    canfdi_svf_t all;
+    canfdi_svf_t sub;
+    canfdi_svf_cfg_t cfg = {.order = c->order, .omega_c_rad_s = c->wc, .outputs = (uint8_t)mask};
+    int k;
+    init_or_fail(&all, c->order, c->wc);
+    ck_assert_int_eq(canfdi_svf_init(&sub, &cfg), CANFDI_OK);
+    canfdi_svf_reset(&all, 1000);
+    canfdi_svf_reset(&sub, 1000);
+    for (k = 0; k < 3000; k++) {
+      const int32_t x = ((k / 500) % 2 == 0) ? (k * 37) : -(k * 53);
+      canfdi_svf_step(&all, x);
+      canfdi_svf_step(&sub, x);
+      ck_assert_int_eq(sub.y_q16, ((mask & CANFDI_SVF_OUT_Y) != 0U) ? all.y_q16 : 1000);
+      ck_assert_int_eq(sub.dy_q16, ((mask & CANFDI_SVF_OUT_DY) != 0U) ? all.dy_q16 : 0);
+      ck_assert_int_eq(sub.d2y_q16, ((mask & CANFDI_SVF_OUT_D2Y) != 0U) ? all.d2y_q16 : 0);
+      ck_assert_mem_eq(sub.v_q32, all.v_q32, sizeof sub.v_q32);
+    }
+  }
+  {
+    canfdi_svf_t f;
+    canfdi_svf_cfg_t bad = {.order = c->order, .omega_c_rad_s = c->wc, .outputs = 0x08U};
+    ck_assert_int_eq(canfdi_svf_init(&f, &bad), -CANFDI_EINVAL);
+  }
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("svf");
   TCase *tc;
 
   tc = tcase_create("config");
+  tcase_add_loop_test(tc, test_output_subset, 0, (int)N_FCFG);
   tcase_add_loop_test(tc, test_cfg_domain, 0, (int)(sizeof cfg_cases / sizeof cfg_cases[0]));
   tcase_add_test(tc, test_null_args);
   suite_add_tcase(s, tc);
