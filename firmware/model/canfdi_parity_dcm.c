@@ -121,7 +121,21 @@ static int64_t pdcm_mac(int64_t acc, canfdi_parity_dcm_coef_t c, int32_t x, unsi
 {
   const int64_t p = (int64_t)c.m * (int64_t)x;
   const int32_t s = (int32_t)c.f + (int32_t)fx - (int32_t)PDCM_ACC_FRAC;
-  const int64_t t = (s >= 0) ? canfdi_asr64_rnd(p, (unsigned)s) : canfdi_shl64_sat(p, (unsigned)(-s));
+  int64_t t;
+  if ((s >= 1) && (s <= 31)) {
+    /* the usual case, on the two 32-bit halves (a run-time 64-bit shift
+     * is a branchy sequence on ARMv7-M and a libgcc call on ARMv6-M):
+     * floor(p / 2^s) plus the last bit shifted out, as canfdi_asr64_rnd */
+    const uint64_t u = (uint64_t)p;
+    const uint32_t lo = (uint32_t)u;
+    const uint32_t hi = (uint32_t)(u >> 32);
+    const unsigned k = (unsigned)s;
+    const uint32_t rlo = (lo >> k) | (hi << (32U - k));
+    const int32_t rhi = canfdi_asr32(canfdi_wrap_u32_to_s32(hi), k);
+    t = canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)rhi << 32) | rlo) + (int64_t)((lo >> (k - 1U)) & 1U);
+  } else {
+    t = (s >= 0) ? canfdi_asr64_rnd(p, (unsigned)s) : canfdi_shl64_sat(p, (unsigned)(-s));
+  }
   return sub ? canfdi_sub_s64_sat(acc, t) : canfdi_add_s64_sat(acc, t);
 }
 
