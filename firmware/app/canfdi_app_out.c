@@ -17,6 +17,7 @@ void canfdi_app_out_init(canfdi_app_out_t *o, const canfdi_dtc_t *dtc)
     const int32_t st = (i < (uint32_t)dtc->n_dtcs) ? canfdi_dtc_status(dtc, (uint8_t)i) : 0;
     o->dtc_status_sent[i] = (st >= 0) ? (uint8_t)st : 0U;
   }
+  o->dtc_changes_seen = dtc->changes;
   o->rr_frames = 0U;
   o->step_time_max_us = 0U;
   o->cycle_time_max_us = 0U;
@@ -35,12 +36,16 @@ static uint8_t stored_count(const canfdi_dtc_t *dtc)
   return (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TFSLC);
 }
 
-/* On change: one EcuDtc per DTC whose status differs from the last sent. */
+/* On change: one EcuDtc per DTC whose status differs from the last sent.
+ * A status changes only with dtc->changes (canfdi_dtc.h): while that has
+ * not moved there is nothing to look for. */
 static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc_t *dtc)
 {
-  const uint8_t count = stored_count(dtc);
+  const uint8_t count = (dtc->changes != o->dtc_changes_seen) ? stored_count(dtc) : 0U;
+  const uint32_t n = (dtc->changes != o->dtc_changes_seen) ? (uint32_t)dtc->n_dtcs : 0U;
   uint32_t j;
-  for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
+  o->dtc_changes_seen = dtc->changes;
+  for (j = 0U; j < n; j++) {
     const int32_t st = canfdi_dtc_status(dtc, (uint8_t)j);
     const uint8_t s = (st >= 0) ? (uint8_t)st : 0U;
     if (s != o->dtc_status_sent[j]) {

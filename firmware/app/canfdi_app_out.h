@@ -69,6 +69,8 @@ typedef struct {
 
 typedef struct {
   uint8_t dtc_status_sent[CANFDI_CFG_DTC_MAX_DTCS]; /* last status queued per DTC */
+  uint32_t dtc_changes_seen;   /* dtc->changes at the last look for changes:
+                                * a status changes only with it */
   uint32_t rr_frames;          /* cyclic EcuDtc frames composed (wraps by intent) */
   uint32_t step_time_max_us;   /* port timing since the last EcuStatus */
   uint32_t cycle_time_max_us;

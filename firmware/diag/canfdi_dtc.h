@@ -287,8 +287,10 @@ typedef struct {
 
 /* The DTC memory, caller-owned (normally static). Read fields freely; write
  * only through the functions below. `changes` is incremented (wrapping) on
- * every change of the persistent state: save to NVM when it differs from
- * the value at the last save. */
+ * every change of the persistent state, every status byte included: save
+ * to NVM when it differs from the value at the last save, and look for
+ * status changes only when it moved (tests/unit/test_dtc.c checks this on
+ * random histories). */
 typedef struct {
   const canfdi_dtc_def_t *table;
   uint8_t n_dtcs;

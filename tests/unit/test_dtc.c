@@ -803,9 +803,15 @@ static void pass_report_checked(canfdi_dtc_t *m, uint8_t i, canfdi_deb_report_t 
 
 static void random_history(canfdi_dtc_t *m, uint32_t seed, int steps, uint32_t fail_pct)
 {
+  uint8_t before[CANFDI_CFG_DTC_MAX_DTCS];
+  uint32_t changes_before;
   rng_state = seed;
   ck_assert_int_eq(canfdi_dtc_cycle_start(m), CANFDI_OK);
   for (int k = 0; k < steps; k++) {
+    for (uint8_t j = 0U; j < m->n_dtcs; j++) {
+      before[j] = m->dtc[j].status;
+    }
+    changes_before = m->changes;
     const uint32_t r = rng() % 100U;
     const uint8_t i = (uint8_t)(rng() % m->n_dtcs);
     if (r < 3U) {
@@ -825,6 +831,12 @@ static void random_history(canfdi_dtc_t *m, uint32_t seed, int steps, uint32_t f
       }
     }
     ck_assert(canfdi_dtc_invariants_hold(m));
+    /* a status byte changes only with `changes` (the header's contract) */
+    if (m->changes == changes_before) {
+      for (uint8_t j = 0U; j < m->n_dtcs; j++) {
+        ck_assert_uint_eq(m->dtc[j].status, before[j]);
+      }
+    }
   }
   ck_assert_int_eq(canfdi_dtc_cycle_end(m), CANFDI_OK);
 }
