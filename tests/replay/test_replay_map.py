@@ -69,6 +69,25 @@ def test_mapped_bus_at_1_ms(late_log: Path, tmp_path: Path) -> None:
     assert any(n["monitor"] == "not applicable" and n["codes"] == ["U1A20"] for n in doc["not_judged"])
 
 
+def test_mapped_bus_bad_lines_and_places(late_log: Path, tmp_path: Path) -> None:
+    """The other bus's candump log with a line that is no frame and an error frame: the line is
+    reported with its number, the error frame is never made into an input, the diagnosis stands;
+    a frame of another channel is counted at its own line."""
+    log = vehicle_log(late_log, tmp_path / "vehicle.log")
+    lines = log.read_text().splitlines(keepends=True)
+    stamp = lines[999][:19]
+    lines[999:999] = ["not a frame\n", f"{stamp} can2 20000080#0000000000000000\n"]
+    lines[3000:3000] = [f"{lines[3000][:19]} can7 123#{lines[3000].split('#')[1]}"]
+    log.write_text("".join(lines))
+    rc, doc, out, err = run_replay(["--map", str(DATA / "vehicle.map"), str(log)], tmp_path)
+    assert doc is not None and rc == 1, err
+    assert [f["code"] for f in doc["dtcs"]] == ["P1A20"]
+    dq = doc["data_quality"][0]
+    assert [(b["line"], b["text"]) for b in dq["bad_lines"]] == [(1000, "not a frame")]
+    assert dq["error_frames"] == 0
+    assert dq["other_channels"] == {"can7": {"frames": 1, "first_line": 3001}}
+
+
 def test_mapped_bus_at_10_ms(late_log: Path, tmp_path: Path) -> None:
     """At 10 ms the models cannot be judged (they need 1 ms samples), the frame checks can:
     no timeout while the frames come, a timeout when MotorFb stops for 100 ms while the rest of

@@ -107,6 +107,13 @@ def status_text(st: int) -> str:
     return "testFailed" if st & 0x01 else "passed"
 
 
+def where(fmt: str, line: int) -> str:
+    """A place in a log as a person reads it: "line N", for BLF and MF4 (no lines) "frame N"."""
+    if line < 0:
+        return "the file"
+    return f"{'frame' if fmt in ('blf', 'mf4') else 'line'} {line}"
+
+
 def status_bits(st: int) -> dict[str, int]:
     return {name: (st >> i) & 1 for i, name in enumerate(STATUS_BITS)}
 
@@ -159,7 +166,7 @@ class LogState:
     outliers: list[dict[str, Any]] = field(default_factory=list)
     fd: list[dict[str, Any]] = field(default_factory=list)
     readerr: list[dict[str, Any]] = field(default_factory=list)
-    input_problems: list[tuple[str, int, str]] = field(default_factory=list)
+    input_problems: list[tuple[str, int, str, str]] = field(default_factory=list)
     input_problem_count: int = 0
 
     @property
@@ -500,7 +507,7 @@ class Report:
                 "log": lg.index,
                 "bad_line_count": int(eo.get("bad_lines", 0)) + lg.input_problem_count,
                 "bad_lines": [{"line": b["line"], "why": b["why"], "text": b["text"]} for b in lg.bad]
-                + [{"line": ln, "why": why, "text": ""} for _, ln, why in lg.input_problems],
+                + [{"line": ln, "why": why, "text": text} for _, ln, why, text in lg.input_problems],
                 "read_errors": [{"line": r["line"], "why": r["why"]} for r in lg.readerr],
                 "truncated": bool(eo.get("truncated", False)) or bool(lg.readerr),
                 "gaps": [{"from_s": a, "to_s": b, "seconds": round(b - a, 6)} for a, b in lg.gaps],
