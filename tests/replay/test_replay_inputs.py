@@ -17,7 +17,7 @@ from pathlib import Path
 import can
 import pytest
 
-from conftest import CORE, CORE_ASAN, ROOT, SCENARIOS, make_sil_log, run_replay
+from conftest import CORE, CORE_ASAN, ROOT, SCENARIOS, make_sil_log, run_replay, undocumented_keys
 
 SDIST = ROOT / ".deps" / "sdist"
 LOG_SUFFIXES = (".asc", ".blf", ".trc", ".csv", ".log", ".mf4", ".gz")
@@ -173,6 +173,7 @@ def test_bad_lines_are_reported_and_the_rest_judged(ia_log: Path, reference: dic
     assert dq["gap_count"] == 0 and dq["time_stamp_outliers"] == 1
     assert dq["time_stamp_outliers_first"][0]["line"] == _line_no(all_lines, noise[7][1].rstrip("\n"))
     assert "bad line(s) (first: line 6:" in out
+    assert not undocumented_keys(doc), "keys the schema does not name"
 
 
 def test_channel_option_and_auto_choice(ia_log: Path, tmp_path: Path) -> None:

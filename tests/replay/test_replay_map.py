@@ -12,7 +12,7 @@ import cantools
 import can
 import pytest
 
-from conftest import ROOT, make_sil_log, run_replay
+from conftest import ROOT, make_sil_log, run_replay, undocumented_keys
 
 DATA = Path(__file__).resolve().parent / "data"
 OURS = cantools.database.load_file(str(ROOT / "dbc" / "canfdi.dbc"))
@@ -67,6 +67,7 @@ def test_mapped_bus_at_1_ms(late_log: Path, tmp_path: Path) -> None:
     judged = {n["monitor"]: n for n in doc["not_judged"]}
     assert "ThrSensor is not in the recording" in judged["com_thr"]["spans"][0]["why"]
     assert any(n["monitor"] == "not applicable" and n["codes"] == ["U1A20"] for n in doc["not_judged"])
+    assert not undocumented_keys(doc), "keys the schema does not name"
 
 
 def test_mapped_bus_bad_lines_and_places(late_log: Path, tmp_path: Path) -> None:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import CORE, ROOT, SCENARIOS, make_sil_log, run_replay
+from conftest import CORE, ROOT, SCENARIOS, make_sil_log, run_replay, undocumented_keys
 
 CHROMIUM = shutil.which("chromium-headless-shell") or shutil.which("chromium")
 
@@ -30,6 +30,13 @@ def test_json_report(demo_log: Path, tmp_path: Path) -> None:
     assert doc["schema"] == "canfdi-replay/1"
     fw = subprocess.run([str(CORE), "--fw-id"], capture_output=True, text=True, check=True).stdout.strip()
     assert doc["firmware"]["id"] == fw and fw.startswith("fw-sha256:")
+    # the identification the ECU reports (UDS DIDs F195, F182), from the firmware's defaults
+    src = (ROOT / "firmware" / "uds" / "canfdi_uds.c").read_text()
+    ident = re.search(r"canfdi_uds_ident_t ident = \{\s*\{([^}]*)\},\s*\{([^}]*)\}", src)
+    assert ident is not None
+    sw, cal = ("".join(re.findall(r"'(.)'", g)).rstrip() for g in ident.groups())
+    assert (doc["firmware"]["sw_version"], doc["firmware"]["calibration_id"]) == (sw, cal) and sw
+    assert not undocumented_keys(doc), "keys the schema does not name"
     assert doc["dbc"]["sha256"] == hashlib.sha256((ROOT / "dbc" / "canfdi.dbc").read_bytes()).hexdigest()
     lg = doc["logs"][0]
     assert lg["sha256"] == hashlib.sha256(demo_log.read_bytes()).hexdigest()

@@ -99,12 +99,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("logs", nargs="+", metavar="LOG", type=Path,
                    help="recorded logs: candump .log (and .log.gz), .asc, .blf, .trc, .csv, .mf4; "
                         "several are consecutive drives")
-    p.add_argument("--json", metavar="FILE", type=Path, help="write the JSON report (schema: tools/replay/README.md)")
+    p.add_argument("--json", metavar="FILE", type=Path, help="write the JSON report (schema: the docstring of tools/canfdi/replay_report.py)")
     p.add_argument("--html", metavar="FILE", type=Path,
                    help="write the HTML report: one self-contained file with the plots inline")
     p.add_argument("--map", metavar="FILE", type=Path,
                    help="map another DBC's frames and signals onto the supervisor's inputs "
-                        "(format: tools/replay/README.md)")
+                        "(format: the docstring of tools/canfdi/replay_map.py; example: tests/replay/data/vehicle.map)")
     g = p.add_argument_group("bus (python-can's flags)")
     g.add_argument("-c", "--channel", help="the channel in the log to judge (default: the first channel "
                                            "carrying a frame of dbc/canfdi.dbc)")
@@ -329,7 +329,8 @@ def print_timeline(report: Report, a: argparse.Namespace, out: IO[str]) -> None:
             ag = lg.agree
             print(f"canfdi-replay: {lg.path} ({lg.fmt}, {eo.get('frames', 0)} frames, "
                   f"{eo.get('first_t', 0):.3f}-{eo.get('last_t', 0):.3f} s, time base {lg.clock or '-'}, "
-                  f"channel {lg.channel or '-'}), firmware {report.hdr.get('fw', '?')}", file=out)
+                  f"channel {lg.channel or '-'}), firmware {report.hdr.get('sw_version', '?')} "
+                  f"({report.hdr.get('fw', '?')}, calibration {report.hdr.get('calibration_id', '?')})", file=out)
             if lg.start == "power-up":
                 print(f"  start: at the recorded ECU's power-up ({lg.start_decided_by}); judged from the first step",
                       file=out)

@@ -209,7 +209,8 @@ def write_html(report: Report, doc: dict[str, Any], path: Path) -> None:
                     "<h1>canfdi-replay: diagnosis of a recorded CAN log</h1>"]
     codes = sorted({f["code"] for f in doc["dtcs"]})
     h.append(f"<p><b>{'Trouble codes found: ' + ', '.join(codes) if codes else 'No trouble code found.'}</b> "
-             f"Firmware {_esc(doc['firmware']['id'])} ({_esc(doc['firmware']['calibration'])}); "
+             f"Firmware {_esc(doc['firmware']['sw_version'])} ({_esc(doc['firmware']['id'])}), calibration "
+             f"{_esc(doc['firmware']['calibration_id'])} ({_esc(doc['firmware']['calibration'])}); "
              f"DBC {_esc(doc['dbc'].get('path', ''))} sha256 {_esc(doc['dbc'].get('sha256', '')[:16])}…</p>")
     h.append("<h2>Logs</h2>")
     rows = []
