@@ -6,6 +6,7 @@ than a blank page), the command line."""
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 import shutil
 import subprocess
@@ -129,3 +130,18 @@ def test_command_line(tmp_path: Path) -> None:
     assert r.returncode == 1
     assert r.stdout.splitlines()[-1] == "result: 1 trouble code found: P0122"
     assert r.stderr == ""  # no progress bar when stderr is not a terminal
+
+
+def test_closed_stdout(tmp_path: Path) -> None:
+    """The reader of the timeline goes away (`canfdi-replay LOG | head -0`): no traceback, the
+    exit status still says what was found, the JSON report is still written."""
+    log = make_sil_log(next(s for s in SCENARIOS if s.stem == "tps1_open"))
+    js = tmp_path / "r.json"
+    p = subprocess.Popen([str(ROOT / ".venv" / "bin" / "canfdi-replay"), str(log), "--json", str(js)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout is not None and p.stderr is not None
+    p.stdout.close()
+    err = p.stderr.read()
+    assert p.wait(timeout=120) == 1, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
+    assert [f["code"] for f in json.loads(js.read_text())["dtcs"]] == ["P0122"]

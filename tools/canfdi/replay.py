@@ -490,7 +490,13 @@ def main(argv: list[str] | None = None) -> int:
     rc = run(a, report)
     if rc != 0:
         return rc
-    print_timeline(report, a, sys.stdout)
+    try:
+        print_timeline(report, a, sys.stdout)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # the reader of the timeline went away (`| head`): the reports are still written
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
     doc = report.to_json(a.bitrate, "canfdi-replay")
     if a.json is not None:
         try:
