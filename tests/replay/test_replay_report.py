@@ -99,6 +99,10 @@ def test_html_report_in_a_browser(demo_log: Path, tmp_path: Path) -> None:
     for heading in ("Trouble codes", "Timeline", "Residuals against their thresholds", "Parameter estimates",
                     "Evidence", "Not judged", "Data quality"):
         assert f">{heading}" in text
+    for row in ("bad or unparsable lines", "gaps in the log", "rejected input frames", "missing input frames",
+                "error frames", "bus load"):
+        assert f"<td>{row}</td>" in text, row
+    assert text.count('alt="bus load"') == 1 and "dcm degraded" in text  # the degradation at each code
     base = [str(CHROMIUM), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars"]
     dom = subprocess.run(base + ["--dump-dom", html.as_uri()], capture_output=True, text=True, timeout=120).stdout
     m = re.search(r'data-images-ok="(\d+)"', dom)
@@ -130,6 +134,52 @@ def test_command_line(tmp_path: Path) -> None:
     assert r.returncode == 1
     assert r.stdout.splitlines()[-1] == "result: 1 trouble code found: P0122"
     assert r.stderr == ""  # no progress bar when stderr is not a terminal
+
+
+def _stderr_on_a_terminal(args: list[str]) -> tuple[int, str]:
+    """canfdi-replay with its stderr on a pseudo-terminal: (exit status, what the terminal got)."""
+    import os
+    import pty
+    import select
+    master, slave = pty.openpty()
+    try:
+        p = subprocess.Popen([str(ROOT / ".venv" / "bin" / "canfdi-replay"), "-q", *args],
+                             stdout=subprocess.DEVNULL, stderr=slave)
+        os.close(slave)
+        got = b""
+        while True:
+            ready, _, _ = select.select([master], [], [], 120)
+            if not ready:
+                p.kill()
+                raise AssertionError("canfdi-replay hung")
+            try:
+                chunk = os.read(master, 65536)
+            except OSError:  # the terminal closed: the process is gone
+                break
+            if not chunk:
+                break
+            got += chunk
+        return p.wait(timeout=120), got.decode(errors="replace")
+    finally:
+        os.close(master)
+
+
+def test_progress_bar_on_a_terminal(tmp_path: Path) -> None:
+    """On a terminal a progress bar (over the bytes of a candump log the core reads, over the frames
+    of a format converted through python-can) is drawn on stderr and cleared at the end;
+    --no-progress draws none (and none off a terminal: test_command_line)."""
+    import can
+    log = make_sil_log(next(s for s in SCENARIOS if s.stem == "tps1_open"))
+    asc = tmp_path / "run.asc"
+    with can.Logger(str(asc)) as w:
+        for msg in can.LogReader(str(log)):
+            w.on_message_received(msg)
+    for path, unit in ((log, "B/s"), (asc, "frames")):
+        rc, term = _stderr_on_a_terminal([str(path)])
+        assert rc == 1
+        assert "replay:" in term and unit in term and term.endswith("\r"), term
+        rc, term = _stderr_on_a_terminal(["--no-progress", str(path)])
+        assert rc == 1 and term == "", term
 
 
 def test_closed_stdout(tmp_path: Path) -> None:
