@@ -42,8 +42,11 @@ MATRIX = sorted((ROOT / "tests" / "sil" / "matrix").glob("*.scn"))
 ECU_ACTIONS = re.compile(r"^\s*(cycle|clear|power_cycle)\b", re.M)
 #: Longer than this (simulated seconds) is left to `make sil-test` alone.
 MAX_DURATION_S = 60.0
-#: The HIL recordings tests/replay/record_hil.sh makes (scenario paths).
-HIL_SCENARIOS = ("tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn",)
+#: Monitors judged from the first frame on (frame checks, range checks): no settling.
+NO_SETTLING = {"com_dcm", "com_thr", "tps_range"}
+#: The HIL recordings tests/replay/record_hil.sh makes (scenario paths; REPLAY_HIL_SCN of mk/replay.mk).
+HIL_SCENARIOS = ("tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn", "tests/sil/scenarios/tps1_open.scn",
+                 "tests/sil/scenarios/dcm_ra_up.scn")
 
 
 def duration_s(scn: Path) -> float:
