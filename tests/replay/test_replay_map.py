@@ -133,3 +133,34 @@ def test_bad_map_files(text: str, message: str, late_log: Path, tmp_path: Path) 
     mp.write_text(text)
     rc, doc, out, err = run_replay(["--map", str(mp), str(late_log)], tmp_path)
     assert rc == 2 and message in err and str(mp) in err, err
+
+
+def test_scale_and_offset(tmp_path: Path) -> None:
+    """An input is scale x (the other DBC's physical value) + offset, in the unit the map states;
+    const gives a value the bus does not carry. The frame made is dbc/canfdi.dbc's, E2E-protected."""
+    import io
+
+    from canfdi.replay_input import Problems
+    from canfdi.replay_map import Mapper
+    (tmp_path / "vehicle.dbc").write_text((DATA / "vehicle.dbc").read_text())
+    mp = tmp_path / "offset.map"
+    mp.write_text("dbc = vehicle.dbc\n"
+                  "DcmUa      = MotorFb.ArmVoltage scale 0.001 offset 0.5 unit V\n"
+                  "DcmIa      = MotorFb.ArmCurrent scale -0.001 offset -1 unit A\n"
+                  "DcmOmega   = MotorFb.SpeedRpm   scale 0.104719755 unit rad/s\n"
+                  "DcmUsupply = const 48 unit V\n")
+    m = Mapper.load(mp)
+    data = VEHICLE.encode_message("MotorFb", {"ArmVoltage": 12000, "ArmCurrent": 2500, "SpeedRpm": 955.0})
+    log = tmp_path / "one.log"
+    log.write_text(f"(0000000001.000000) can0 123#{data.hex().upper()}\n")
+    out = io.StringIO()
+    assert m.write(log, "candump", out, Problems()) == 1
+    frame = can.Message(arbitration_id=int(out.getvalue().split()[2].split("#")[0], 16),
+                        data=bytes.fromhex(out.getvalue().split("#")[1]))
+    d = OURS.decode_message(frame.arbitration_id, frame.data)
+    assert frame.arbitration_id == OURS.get_message_by_name("DcmSensor").frame_id
+    assert d["DcmUa"] == pytest.approx(12.5, abs=0.01)      # 12000 mV x 0.001 + 0.5
+    assert d["DcmIa"] == pytest.approx(-3.5, abs=0.01)      # 2500 mA x -0.001 - 1
+    assert d["DcmOmega"] == pytest.approx(100.0, abs=0.05)  # 955 rpm
+    assert d["DcmUsupply"] == pytest.approx(48.0, abs=0.1)
+    assert "x 0.001 + 0.5 V" in m.info()["inputs"]["DcmUa"] and "const 48" in m.info()["inputs"]["DcmUsupply"]
