@@ -10,6 +10,8 @@ from __future__ import annotations
 import ast
 import gzip
 import itertools
+import json
+import subprocess
 import tarfile
 import time
 from pathlib import Path
@@ -283,6 +285,35 @@ def test_damaged_files(core: Path, ia_log: Path, tmp_path: Path) -> None:
         blf.write_bytes(head + bytes(range(256)) * 10)
         rc, doc, out, err = run_replay([str(blf)], tmp_path, core=core)
         assert rc == 3 and doc is not None and doc["data_quality"][0]["bad_lines"]
+
+
+@pytest.mark.parametrize("suffix", [".asc", ".trc", ".csv", ".blf", ".mf4"])
+def test_truncated_files_of_every_format(suffix: str, ia_log: Path, tmp_path: Path) -> None:
+    """A file of each python-can format cut at two thirds: a message with the file and the line (the
+    cut last line of a text format; a BLF file shorter than its header says: truncated; an MF4 file
+    asammdf cannot open), what was there judged, no traceback on stderr."""
+    full = tmp_path / f"full{suffix}"
+    _write_with(full, ia_log, {})
+    data = full.read_bytes()
+    cut = tmp_path / f"cut{suffix}"
+    cut.write_bytes(data[: len(data) * 2 // 3])
+    js = tmp_path / "r.json"
+    r = subprocess.run([str(ROOT / ".venv" / "bin" / "canfdi-replay"), "--no-progress", "--json", str(js), str(cut)],
+                       capture_output=True, text=True, timeout=120)  # a process of its own: stderr to its end
+    rc, text, err = r.returncode, r.stdout, r.stderr
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+    doc = json.loads(js.read_text())
+    dq = doc["data_quality"][0]
+    if suffix == ".mf4":
+        assert rc == 3 and "cannot open it as MF4" in dq["bad_lines"][0]["why"]
+        return
+    assert rc == 1 and doc["logs"][0]["frames"] > 10000
+    if suffix == ".blf":
+        assert dq["truncated"] and dq["bad_lines"][0]["why"].startswith("truncated:")
+        assert "the frames after frame" in text
+    else:
+        last = cut.read_bytes().count(b"\n") + 1
+        assert [b["line"] for b in dq["bad_lines"]] == [last], dq["bad_lines"]
 
 
 def test_unusable_arguments(tmp_path: Path) -> None:

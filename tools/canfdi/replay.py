@@ -305,6 +305,7 @@ def _run_core(a: argparse.Namespace, report: Report, core_bin: Path, logs: list[
         st.sha256 = hashes.get(i, "")
         st.input_problems = problems[i].items
         st.input_problem_count = problems[i].count
+        st.input_truncated = problems[i].truncated
     for msg in errors:
         print(f"canfdi-replay: {msg}", file=sys.stderr)
     stderr = b"".join(err_chunks).decode(errors="replace").strip()

@@ -14,10 +14,13 @@ reported with its number too, unless it is one the format holds besides
 frames (blank lines, comments, the ASC header and trigger-block lines,
 ASC events with a time stamp that are not CAN frames: statistics, chip
 states, ...; TRC bus states and warnings); a binary reader that raises ends that file, reported with
-the number of frames read before. Frames python-can returns are written as
-they are: the core counts CAN FD, remote and error frames and never feeds
-them to the supervisor. A negative or non-finite time stamp is reported
-and skipped.
+the number of frames read before, and a BLF file shorter than its header
+states is reported as truncated (python-can's reader ends there without a
+word). Frames python-can returns are written as they are: the core counts
+CAN FD, remote and error frames and never feeds them to the supervisor. A
+classic frame with fewer data bytes than its DLC (python-can's ASC reader
+makes one of a line cut in its data) and a negative or non-finite time
+stamp are reported and skipped.
 
 Each frame goes into the pipe at its place in the file: a text log's frame
 on the candump line of the same number (the lines between are written
@@ -31,10 +34,15 @@ MF4, which have no lines, the frame's number in the file.
 """
 from __future__ import annotations
 
+import contextlib
+import gc
 import gzip
 import io
+import logging
 import math
+import os
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator, TextIO
@@ -59,6 +67,7 @@ class Problems:
     items: list[tuple[str, int, str, str]] = field(default_factory=list)  # (file, line or -1, reason, text)
     count: int = 0
     keep: int = 100
+    truncated: bool = False  # the rest of the file could not be read
 
     def add(self, path: Path, line: int, why: str, text: str = "") -> None:
         """text: the line's first 80 characters, when it has one."""
@@ -257,6 +266,24 @@ class _FakeHeader:
 _TEXT_READERS: dict[str, type] = {"asc": can.ASCReader, "trc": can.TRCReader, "csv": can.CSVReader}
 
 
+#: python-can's TRC reader logs the lines it cannot parse as warnings; they are reported here
+#: with their numbers instead.
+logging.getLogger("can.io.trc").setLevel(logging.ERROR)
+
+
+@contextlib.contextmanager
+def _quiet_destructors() -> Iterator[None]:
+    """asammdf's MDF object raises in its destructor when opening a damaged file failed; the failure
+    is reported as the file's problem, the destructor's exception would only print a traceback."""
+    old = sys.unraisablehook
+    sys.unraisablehook = lambda _u: None
+    try:
+        yield
+    finally:
+        gc.collect()
+        sys.unraisablehook = old
+
+
 def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterator[tuple[int, can.Message]]:
     """A text log through python-can's reader, resumed after every line it raises on: (line, frame)."""
     raw: TextIO = gzip.open(path, "rt", encoding="utf-8", errors="replace") if gz \
@@ -279,6 +306,7 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
             except (OSError, EOFError, gzip.BadGzipFile) as e:
                 lines.reported()
                 problems.add(path, lines.n, f"read error, the rest of the file is lost: {e}")
+                problems.truncated = True
                 return
             # resume after the bad line with the reader's state (base, start time)
             state = {k: v for k, v in vars(reader).items() if k != "file"}
@@ -293,18 +321,27 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
 
 def _binary_messages(path: Path, fmt: str, problems: Problems) -> Iterator[tuple[int, can.Message]]:
     n = 0
-    try:
-        reader = can.BLFReader(path) if fmt == "blf" else can.LogReader(path)
-    except Exception as e:  # noqa: BLE001 — any reader failure is a message, never a crash
-        problems.add(path, -1, f"python-can cannot open it as {fmt.upper()}: {type(e).__name__}: {e}")
-        return
+    with _quiet_destructors():
+        try:
+            reader = can.BLFReader(path) if fmt == "blf" else can.LogReader(path)
+        except Exception as e:  # noqa: BLE001 — any reader failure is a message, never a crash
+            problems.add(path, -1, f"python-can cannot open it as {fmt.upper()}: {type(e).__name__}: {e}")
+            return
     try:
         for msg in reader:
             n += 1
             yield n, msg
+        # python-can's BLF reader ends without a word where a cut file ends; its header knows the size
+        stated = int(getattr(reader, "file_size", 0) or 0) if fmt == "blf" else 0
+        size = os.path.getsize(path)
+        if size < stated:
+            problems.add(path, -1, f"truncated: {size} of the {stated} bytes its header states; the frames "
+                         f"after frame {n} are lost")
+            problems.truncated = True
     except Exception as e:  # noqa: BLE001 — a damaged binary log ends here, reported
         problems.add(path, -1, f"python-can's reader stopped after frame {n}: {type(e).__name__}: {e}; "
                      f"the rest of the file is not read")
+        problems.truncated = True
     finally:
         try:
             reader.stop()
@@ -324,6 +361,13 @@ def numbered_messages(path: Path, fmt: str, problems: Problems) -> Iterator[tupl
 def messages(path: Path, fmt: str, problems: Problems) -> Iterator[can.Message]:
     """Every frame python-can reads from a non-candump log; problems reported, never raised."""
     return (msg for _, msg in numbered_messages(path, fmt, problems))
+
+
+def short_data(msg: can.Message) -> bool:
+    """A classic data frame with fewer data bytes than its DLC 0..8 says (python-can's ASC reader
+    makes one of a line cut in its data: "d 8 A" is one byte, 0x0A)."""
+    return (not msg.is_fd and not msg.is_remote_frame and not msg.is_error_frame and msg.dlc <= 8
+            and len(msg.data) < msg.dlc)
 
 
 class PlacedWriter:
@@ -348,9 +392,13 @@ def write_candump(msgs: Iterator[tuple[int, can.Message]], out: io.TextIOBase | 
     w = PlacedWriter(out)
     n = 0
     for pos, msg in msgs:
+        where = (f"frame {pos}", -1) if fmt in BINARY_FORMATS else ("frame", pos)
+        if short_data(msg):
+            problems.add(path, where[1], f"{where[0]}: {len(msg.data)} data bytes, its DLC says {msg.dlc} (a cut "
+                         f"line?); skipped")
+            continue
         line = candump_line(msg)
         if line is None:
-            where = (f"frame {pos}", -1) if fmt in BINARY_FORMATS else ("frame", pos)
             problems.add(path, where[1], f"{where[0]}: time stamp {msg.timestamp!r} is negative, not finite or "
                          f"beyond the year 33658; skipped")
             continue

@@ -211,6 +211,7 @@ class LogState:
     readerr: list[dict[str, Any]] = field(default_factory=list)
     input_problems: list[tuple[str, int, str, str]] = field(default_factory=list)
     input_problem_count: int = 0
+    input_truncated: bool = False
 
     @property
     def last_t(self) -> float:
@@ -552,7 +553,7 @@ class Report:
                 "bad_lines": [{"line": b["line"], "why": b["why"], "text": b["text"]} for b in lg.bad]
                 + [{"line": ln, "why": why, "text": text} for _, ln, why, text in lg.input_problems],
                 "read_errors": [{"line": r["line"], "why": r["why"]} for r in lg.readerr],
-                "truncated": bool(eo.get("truncated", False)) or bool(lg.readerr),
+                "truncated": bool(eo.get("truncated", False)) or bool(lg.readerr) or lg.input_truncated,
                 "gaps": [{"from_s": a, "to_s": b, "seconds": round(b - a, 6)} for a, b in lg.gaps],
                 "gap_count": int(eo.get("gaps", 0)),
                 "time_stamps_back": int(eo.get("back", 0)),
