@@ -102,3 +102,13 @@ bench-replay-jitter: deps $(BUILD)/bin/canfdi-sil $(REPLAY_BIN)
 	@$(PY) bench/bench_replay_jitter.py --out $(BUILD)/bench/replay_jitter.json
 
 BENCH_STEPS += bench-replay-jitter
+
+# canfdi-replay from power-up on the SIL scenarios too long for make test
+# (bench/bench_replay_long.py): each recorded by the release SIL runner and
+# replayed, frame for frame and code for code against the recorded ECU
+# ($(BUILD)/bench/replay_long.json, ~6 min).
+.PHONY: bench-replay-long
+bench-replay-long: deps $(SIL_REL_BIN) $(REPLAY_BIN) $(DRIVE_DIR)/wltc3_10min_s1_dcm.csv $(DRIVE_DIR)/wltc3_10min_s1.csv
+	@$(PY) bench/bench_replay_long.py --sil $(SIL_REL_BIN) --out $(BUILD)/bench/replay_long.json
+
+BENCH_STEPS += bench-replay-long

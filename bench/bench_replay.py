@@ -12,8 +12,10 @@ release SIL runner), one after the other in one run, each pinned to one core
 For each: frames per second and times real time (log seconds per second),
 on the wall clock and on the CPU time the process and its children used
 (the machine may be shared: the CPU figure is the one-core figure), and
-the replay's speed-up over the other two from the same run. Prints a table
-and writes build/bench/replay.json; never fails on a figure.
+the replay's speed-up over the other two from the same run, and whether the
+replay is the recorded run (the recording starts at the ECU's power-up:
+every recorded ECU frame identical, the same codes at the same times).
+Prints a table and writes build/bench/replay.json; never fails on a figure.
 
     python bench/bench_replay.py --log build/bench/replay-1h.log --out build/bench/replay.json
 """
@@ -100,6 +102,11 @@ def main(argv: list[str] | None = None) -> int:
         "log": str(a.log), "frames": frames, "log_seconds": round(log_s, 3),
         "log_bytes": a.log.stat().st_size, "pinned_to_core": 0,
         "findings": [f["code"] for f in doc["dtcs"]],
+        # the recording starts at the recorded ECU's power-up: the replay is that run frame for frame
+        "start": lg["start"], "recorded_ecu": lg["recorded_ecu"],
+        "codes_as_recorded": not doc["recorded_ecu_only"] and all(
+            f["recorded_ecu_first_failed_s"] is not None and abs(f["recorded_ecu_first_failed_s"] - f["first_failed_s"])
+            < 1e-6 for f in doc["dtcs"]),
         "rows": rows,
         "replay_over_read_cpu": cpu_p / cpu_r, "replay_over_read_wall": wall_p / wall_r,
         "replay_over_decode_cpu": cpu_d / cpu_r, "replay_over_decode_wall": wall_d / wall_r,
@@ -119,6 +126,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  replay / read: {result['replay_over_read_cpu']:.1f}x faster (cpu), "
           f"{result['replay_over_read_wall']:.1f}x (wall); replay / decode: {result['replay_over_decode_cpu']:.1f}x "
           f"(cpu), {result['replay_over_decode_wall']:.1f}x (wall); findings {', '.join(result['findings'])}")
+    ecu = result["recorded_ecu"]
+    print(f"  start {result['start']}: recorded ECU {ecu['identical']} of its {ecu['frames']} frames identical, "
+          f"codes {'as' if result['codes_as_recorded'] else 'NOT as'} the recorded ECU's at the same times")
     print(f"  written {a.out}")
     return 0
 

@@ -77,6 +77,7 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make bench-replay         canfdi-replay on a one-hour log against python-can reading/decoding it
   make bench-replay-settle  the settling time of a mid-drive log: SIL recordings cut and replayed
   make bench-replay-jitter  SIL fault recordings re-stamped with jitter and clock drift, replayed
+  make bench-replay-long    the SIL scenarios longer than make test replays, from power-up, frame for frame
   make bench-fleet          canfdi-fleet on the 20 x 10 fleet with 1 and 2 local workers: operating hours per wall second
 
 Drive profiles (docs/driving.md)

@@ -67,9 +67,10 @@ ALL_STEPS += $(REPLAY_BIN) $(REPLAY_ASAN_BIN)
 # Lockstep HIL recordings for the tests, made in one vcan sandbox
 # (tests/replay/record_hil.sh; the scenarios are HIL_SCENARIOS of
 # tests/replay/conftest.py).
-REPLAY_HIL_SCN := tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn
+REPLAY_HIL_SCN := tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn \
+                  tests/sil/scenarios/tps1_open.scn tests/sil/scenarios/dcm_ra_up.scn
 REPLAY_HIL_STAMP := $(BUILD)/replay/test/hil/recorded.stamp
-$(REPLAY_HIL_STAMP): tests/replay/record_hil.sh $(REPLAY_HIL_SCN) $(BUILD)/bin/canfdi-ecu $(BUILD)/hil/canfdi-sim
+$(REPLAY_HIL_STAMP): tests/replay/record_hil.sh mk/replay.mk $(REPLAY_HIL_SCN) $(BUILD)/bin/canfdi-ecu $(BUILD)/hil/canfdi-sim
 	@mkdir -p $(@D)
 	@$(VCAN_RUN) --timeout 600 tests/replay/record_hil.sh $(CURDIR)/$(@D) $(REPLAY_HIL_SCN)
 	@touch $@

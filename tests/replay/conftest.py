@@ -42,8 +42,11 @@ MATRIX = sorted((ROOT / "tests" / "sil" / "matrix").glob("*.scn"))
 ECU_ACTIONS = re.compile(r"^\s*(cycle|clear|power_cycle)\b", re.M)
 #: Longer than this (simulated seconds) is left to `make sil-test` alone.
 MAX_DURATION_S = 60.0
-#: The HIL recordings tests/replay/record_hil.sh makes (scenario paths).
-HIL_SCENARIOS = ("tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn",)
+#: Monitors judged from the first frame on (frame checks, range checks): no settling.
+NO_SETTLING = {"com_dcm", "com_thr", "tps_range"}
+#: The HIL recordings tests/replay/record_hil.sh makes (scenario paths; REPLAY_HIL_SCN of mk/replay.mk).
+HIL_SCENARIOS = ("tests/sil/matrix/dcm_ia_sensor_offset_intermittent.scn", "tests/sil/scenarios/tps1_open.scn",
+                 "tests/sil/scenarios/dcm_ra_up.scn")
 
 
 def duration_s(scn: Path) -> float:
@@ -126,6 +129,32 @@ def recorded_active_after(log: Path, t_s: float, code: str) -> bool:
     t_us = round(t_s * 1e6)
     at = rec.state_at(t_us)
     return bool((at is not None and at[1] & 1) or any(h[0] >= t_us and h[1] & 1 for h in rec.history))
+
+
+#: Report keys whose values are keyed by data (frame, code, input, channel names), not by the schema.
+DATA_KEYED = {"inputs", "codes_not_applied", "models_not_judged", "rejected_frames", "accepted_frames",
+              "other_channels", "unknown_ids", "symptoms", "normalised", "result", "residuals_over_threshold",
+              "parameter_deviation_pct", "freeze_frame"}
+
+
+def undocumented_keys(doc: Any) -> set[str]:
+    """Keys of a JSON report that the schema in tools/canfdi/replay_report.py does not name."""
+    from canfdi import replay_report
+    named = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", replay_report.__doc__ or ""))
+    out: set[str] = set()
+
+    def walk(x: Any) -> None:
+        if isinstance(x, dict):
+            for k, v in x.items():
+                if k not in named:
+                    out.add(k)
+                if k not in DATA_KEYED:
+                    walk(v)
+        elif isinstance(x, list):
+            for v in x:
+                walk(v)
+    walk(doc)
+    return out
 
 
 def cut_log(src: Path, dst: Path, t_from: float) -> Path:

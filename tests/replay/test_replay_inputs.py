@@ -10,6 +10,8 @@ from __future__ import annotations
 import ast
 import gzip
 import itertools
+import json
+import subprocess
 import tarfile
 import time
 from pathlib import Path
@@ -17,7 +19,7 @@ from pathlib import Path
 import can
 import pytest
 
-from conftest import CORE, CORE_ASAN, ROOT, SCENARIOS, make_sil_log, run_replay
+from conftest import CORE, CORE_ASAN, ROOT, SCENARIOS, make_sil_log, run_replay, undocumented_keys
 
 SDIST = ROOT / ".deps" / "sdist"
 LOG_SUFFIXES = (".asc", ".blf", ".trc", ".csv", ".log", ".mf4", ".gz")
@@ -73,6 +75,55 @@ def test_every_format_gives_the_same_diagnosis(suffix: str, ia_log: Path, refere
     assert lg["format"] == ("candump" if suffix == ".log.gz" else suffix.split(".")[1])
 
 
+def _write_with(path: Path, src: Path, extra: dict[int, can.Message]) -> None:
+    """src's frames written by python-can's writer for path's suffix, extra[k] before the k-th."""
+    with can.Logger(str(path)) as w:
+        for k, msg in enumerate(can.LogReader(str(src))):
+            if k in extra:
+                w.on_message_received(extra[k])
+            w.on_message_received(msg)
+
+
+@pytest.mark.parametrize("fmt", ["asc", "trc", "csv"])
+def test_text_formats_report_the_files_own_lines(fmt: str, ia_log: Path, reference: dict, tmp_path: Path) -> None:
+    """A line python-can's reader passes over (ASC, TRC) or raises on (CSV) is reported with its
+    number, and so are the frames the core counts (an error frame, a frame of another channel):
+    each is on the line of the file it came from, not of the candump text the core reads."""
+    out = tmp_path / f"run.{fmt}"
+    t = 0.5
+    if fmt == "trc":  # python-can's TRC writer writes no error frames: a frame of another channel
+        odd = can.Message(timestamp=t, arbitration_id=0x10, is_extended_id=False, data=bytes(8), channel=1)
+    else:
+        odd = can.Message(timestamp=t, is_error_frame=True, channel=0)
+    _write_with(out, ia_log, {2000: odd})
+    lines = out.read_text().splitlines(keepends=True)
+    bad_at = 300
+    lines.insert(bad_at - 1, "this is no frame\n")
+    out.write_text("".join(lines))
+    odd_at = next(n for n, line in enumerate(lines, 1)
+                  if ("ErrorFrame" in line or ",1,0,\n" in line or " DT  2 " in line))
+    rc, doc, text, err = run_replay([str(out)], tmp_path)
+    assert doc is not None and rc == 1, err
+    assert _findings(doc) == _findings(reference)
+    dq = doc["data_quality"][0]
+    assert [(b["line"], b["text"]) for b in dq["bad_lines"]] == [(bad_at, "this is no frame")]
+    if fmt == "trc":
+        assert dq["other_channels"] == {"2": {"frames": 1, "first_line": odd_at}}
+    else:
+        assert [e["line"] for e in dq["error_frames_first"]] == [odd_at]
+    assert f"(first: line {bad_at}: python-can's" in text
+
+
+def test_binary_formats_count_frames(ia_log: Path, tmp_path: Path) -> None:
+    """BLF has no lines: what the core reports is at the frame's number in the file."""
+    out = tmp_path / "run.blf"
+    _write_with(out, ia_log, {2000: can.Message(timestamp=0.5, is_error_frame=True, channel=0)})
+    rc, doc, text, err = run_replay([str(out)], tmp_path)
+    assert doc is not None and rc == 1, err
+    assert [e["line"] for e in doc["data_quality"][0]["error_frames_first"]] == [2001]
+    assert doc["logs"][0]["lines"] == doc["logs"][0]["frames"]  # one line per frame
+
+
 # ------------------------------------------------------------ damaged candump text
 
 def test_bad_lines_are_reported_and_the_rest_judged(ia_log: Path, reference: dict, tmp_path: Path) -> None:
@@ -124,6 +175,7 @@ def test_bad_lines_are_reported_and_the_rest_judged(ia_log: Path, reference: dic
     assert dq["gap_count"] == 0 and dq["time_stamp_outliers"] == 1
     assert dq["time_stamp_outliers_first"][0]["line"] == _line_no(all_lines, noise[7][1].rstrip("\n"))
     assert "bad line(s) (first: line 6:" in out
+    assert not undocumented_keys(doc), "keys the schema does not name"
 
 
 def test_channel_option_and_auto_choice(ia_log: Path, tmp_path: Path) -> None:
@@ -235,6 +287,35 @@ def test_damaged_files(core: Path, ia_log: Path, tmp_path: Path) -> None:
         assert rc == 3 and doc is not None and doc["data_quality"][0]["bad_lines"]
 
 
+@pytest.mark.parametrize("suffix", [".asc", ".trc", ".csv", ".blf", ".mf4"])
+def test_truncated_files_of_every_format(suffix: str, ia_log: Path, tmp_path: Path) -> None:
+    """A file of each python-can format cut at two thirds: a message with the file and the line (the
+    cut last line of a text format; a BLF file shorter than its header says: truncated; an MF4 file
+    asammdf cannot open), what was there judged, no traceback on stderr."""
+    full = tmp_path / f"full{suffix}"
+    _write_with(full, ia_log, {})
+    data = full.read_bytes()
+    cut = tmp_path / f"cut{suffix}"
+    cut.write_bytes(data[: len(data) * 2 // 3])
+    js = tmp_path / "r.json"
+    r = subprocess.run([str(ROOT / ".venv" / "bin" / "canfdi-replay"), "--no-progress", "--json", str(js), str(cut)],
+                       capture_output=True, text=True, timeout=120)  # a process of its own: stderr to its end
+    rc, text, err = r.returncode, r.stdout, r.stderr
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+    doc = json.loads(js.read_text())
+    dq = doc["data_quality"][0]
+    if suffix == ".mf4":
+        assert rc == 3 and "cannot open it as MF4" in dq["bad_lines"][0]["why"]
+        return
+    assert rc == 1 and doc["logs"][0]["frames"] > 10000
+    if suffix == ".blf":
+        assert dq["truncated"] and dq["bad_lines"][0]["why"].startswith("truncated:")
+        assert "the frames after frame" in text
+    else:
+        last = cut.read_bytes().count(b"\n") + 1
+        assert [b["line"] for b in dq["bad_lines"]] == [last], dq["bad_lines"]
+
+
 def test_unusable_arguments(tmp_path: Path) -> None:
     rc, doc, _, err = run_replay([str(tmp_path / "missing.log")], tmp_path)
     assert rc == 2 and "no such file" in err
@@ -257,7 +338,9 @@ def _sdist_members(name: str) -> list[tuple[str, bytes]]:
 
 
 def test_python_can_test_logs(tmp_path: Path) -> None:
-    """Every log file of python-can's own test data: read, judged, nothing raised."""
+    """Every log file of python-can's own test data: read, judged, nothing raised; in its ASC and
+    TRC files (well-formed, with headers, comments, events and bus states besides the frames) no
+    line is reported as bad and every frame python-can reads is replayed."""
     files = [(n, b) for n, b in _sdist_members("python_can") if "/test/data/" in n and n.endswith(LOG_SUFFIXES)]
     assert len(files) >= 15
     seen_fd = seen_err = 0
@@ -272,6 +355,9 @@ def test_python_can_test_logs(tmp_path: Path) -> None:
             assert err.startswith("canfdi-replay:"), (name, err)
             continue
         assert rc in (0, 1, 3) and doc is not None, (name, rc, err)
+        if name.endswith((".asc", ".trc", ".asc.gz")):
+            assert doc["data_quality"][0]["bad_lines"] == [], name
+            assert doc["logs"][0]["frames"] == sum(1 for _ in can.LogReader(str(p))), name
         seen_fd += doc["data_quality"][0]["fd_frames"]
         seen_err += doc["data_quality"][0]["error_frames"]
     assert seen_fd > 0 and seen_err > 0

@@ -12,7 +12,7 @@ import cantools
 import can
 import pytest
 
-from conftest import ROOT, make_sil_log, run_replay
+from conftest import ROOT, make_sil_log, run_replay, undocumented_keys
 
 DATA = Path(__file__).resolve().parent / "data"
 OURS = cantools.database.load_file(str(ROOT / "dbc" / "canfdi.dbc"))
@@ -67,6 +67,26 @@ def test_mapped_bus_at_1_ms(late_log: Path, tmp_path: Path) -> None:
     judged = {n["monitor"]: n for n in doc["not_judged"]}
     assert "ThrSensor is not in the recording" in judged["com_thr"]["spans"][0]["why"]
     assert any(n["monitor"] == "not applicable" and n["codes"] == ["U1A20"] for n in doc["not_judged"])
+    assert not undocumented_keys(doc), "keys the schema does not name"
+
+
+def test_mapped_bus_bad_lines_and_places(late_log: Path, tmp_path: Path) -> None:
+    """The other bus's candump log with a line that is no frame and an error frame: the line is
+    reported with its number, the error frame is never made into an input, the diagnosis stands;
+    a frame of another channel is counted at its own line."""
+    log = vehicle_log(late_log, tmp_path / "vehicle.log")
+    lines = log.read_text().splitlines(keepends=True)
+    stamp = lines[999][:19]
+    lines[999:999] = ["not a frame\n", f"{stamp} can2 20000080#0000000000000000\n"]
+    lines[3000:3000] = [f"{lines[3000][:19]} can7 123#{lines[3000].split('#')[1]}"]
+    log.write_text("".join(lines))
+    rc, doc, out, err = run_replay(["--map", str(DATA / "vehicle.map"), str(log)], tmp_path)
+    assert doc is not None and rc == 1, err
+    assert [f["code"] for f in doc["dtcs"]] == ["P1A20"]
+    dq = doc["data_quality"][0]
+    assert [(b["line"], b["text"]) for b in dq["bad_lines"]] == [(1000, "not a frame")]
+    assert dq["error_frames"] == 0
+    assert dq["other_channels"] == {"can7": {"frames": 1, "first_line": 3001}}
 
 
 def test_mapped_bus_at_10_ms(late_log: Path, tmp_path: Path) -> None:
@@ -113,3 +133,34 @@ def test_bad_map_files(text: str, message: str, late_log: Path, tmp_path: Path) 
     mp.write_text(text)
     rc, doc, out, err = run_replay(["--map", str(mp), str(late_log)], tmp_path)
     assert rc == 2 and message in err and str(mp) in err, err
+
+
+def test_scale_and_offset(tmp_path: Path) -> None:
+    """An input is scale x (the other DBC's physical value) + offset, in the unit the map states;
+    const gives a value the bus does not carry. The frame made is dbc/canfdi.dbc's, E2E-protected."""
+    import io
+
+    from canfdi.replay_input import Problems
+    from canfdi.replay_map import Mapper
+    (tmp_path / "vehicle.dbc").write_text((DATA / "vehicle.dbc").read_text())
+    mp = tmp_path / "offset.map"
+    mp.write_text("dbc = vehicle.dbc\n"
+                  "DcmUa      = MotorFb.ArmVoltage scale 0.001 offset 0.5 unit V\n"
+                  "DcmIa      = MotorFb.ArmCurrent scale -0.001 offset -1 unit A\n"
+                  "DcmOmega   = MotorFb.SpeedRpm   scale 0.104719755 unit rad/s\n"
+                  "DcmUsupply = const 48 unit V\n")
+    m = Mapper.load(mp)
+    data = VEHICLE.encode_message("MotorFb", {"ArmVoltage": 12000, "ArmCurrent": 2500, "SpeedRpm": 955.0})
+    log = tmp_path / "one.log"
+    log.write_text(f"(0000000001.000000) can0 123#{data.hex().upper()}\n")
+    out = io.StringIO()
+    assert m.write(log, "candump", out, Problems()) == 1
+    frame = can.Message(arbitration_id=int(out.getvalue().split()[2].split("#")[0], 16),
+                        data=bytes.fromhex(out.getvalue().split("#")[1]))
+    d = OURS.decode_message(frame.arbitration_id, frame.data)
+    assert frame.arbitration_id == OURS.get_message_by_name("DcmSensor").frame_id
+    assert d["DcmUa"] == pytest.approx(12.5, abs=0.01)      # 12000 mV x 0.001 + 0.5
+    assert d["DcmIa"] == pytest.approx(-3.5, abs=0.01)      # 2500 mA x -0.001 - 1
+    assert d["DcmOmega"] == pytest.approx(100.0, abs=0.05)  # 955 rpm
+    assert d["DcmUsupply"] == pytest.approx(48.0, abs=0.1)
+    assert "x 0.001 + 0.5 V" in m.info()["inputs"]["DcmUa"] and "const 48" in m.info()["inputs"]["DcmUsupply"]

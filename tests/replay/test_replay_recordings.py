@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from canfdi.scenario_file import load as load_scenario
-from conftest import (MATRIX, SCENARIOS, cut_log, duration_s, has_ecu_actions, make_sil_log,
+from conftest import (MATRIX, NO_SETTLING, SCENARIOS, cut_log, duration_s, has_ecu_actions, make_sil_log,
                       recorded_active_after, recorded_ecu, recorded_first_failed, run_replay)
 
 
@@ -69,8 +69,6 @@ def test_every_matrix_fault_is_found(sil_logs: dict[Path, Path], tmp_path: Path)
 
 #: Where the recordings are cut; the second only where the rest is long enough to judge.
 CUTS = (0.4, 2.2)
-#: Monitors judged from the first frame on (frame checks, range checks): no settling.
-NO_SETTLING = {"com_dcm", "com_thr", "tps_range"}
 
 
 # Known wrong findings of a mid-drive replay, kept as failing cases until

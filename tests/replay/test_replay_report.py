@@ -6,6 +6,7 @@ than a blank page), the command line."""
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 import shutil
 import subprocess
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import CORE, ROOT, SCENARIOS, make_sil_log, run_replay
+from conftest import CORE, ROOT, SCENARIOS, make_sil_log, run_replay, undocumented_keys
 
 CHROMIUM = shutil.which("chromium-headless-shell") or shutil.which("chromium")
 
@@ -30,6 +31,13 @@ def test_json_report(demo_log: Path, tmp_path: Path) -> None:
     assert doc["schema"] == "canfdi-replay/1"
     fw = subprocess.run([str(CORE), "--fw-id"], capture_output=True, text=True, check=True).stdout.strip()
     assert doc["firmware"]["id"] == fw and fw.startswith("fw-sha256:")
+    # the identification the ECU reports (UDS DIDs F195, F182), from the firmware's defaults
+    src = (ROOT / "firmware" / "uds" / "canfdi_uds.c").read_text()
+    ident = re.search(r"canfdi_uds_ident_t ident = \{\s*\{([^}]*)\},\s*\{([^}]*)\}", src)
+    assert ident is not None
+    sw, cal = ("".join(re.findall(r"'(.)'", g)).rstrip() for g in ident.groups())
+    assert (doc["firmware"]["sw_version"], doc["firmware"]["calibration_id"]) == (sw, cal) and sw
+    assert not undocumented_keys(doc), "keys the schema does not name"
     assert doc["dbc"]["sha256"] == hashlib.sha256((ROOT / "dbc" / "canfdi.dbc").read_bytes()).hexdigest()
     lg = doc["logs"][0]
     assert lg["sha256"] == hashlib.sha256(demo_log.read_bytes()).hexdigest()
@@ -91,6 +99,10 @@ def test_html_report_in_a_browser(demo_log: Path, tmp_path: Path) -> None:
     for heading in ("Trouble codes", "Timeline", "Residuals against their thresholds", "Parameter estimates",
                     "Evidence", "Not judged", "Data quality"):
         assert f">{heading}" in text
+    for row in ("bad or unparsable lines", "gaps in the log", "rejected input frames", "missing input frames",
+                "error frames", "bus load"):
+        assert f"<td>{row}</td>" in text, row
+    assert text.count('alt="bus load"') == 1 and "dcm degraded" in text  # the degradation at each code
     base = [str(CHROMIUM), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars"]
     dom = subprocess.run(base + ["--dump-dom", html.as_uri()], capture_output=True, text=True, timeout=120).stdout
     m = re.search(r'data-images-ok="(\d+)"', dom)
@@ -122,3 +134,64 @@ def test_command_line(tmp_path: Path) -> None:
     assert r.returncode == 1
     assert r.stdout.splitlines()[-1] == "result: 1 trouble code found: P0122"
     assert r.stderr == ""  # no progress bar when stderr is not a terminal
+
+
+def _stderr_on_a_terminal(args: list[str]) -> tuple[int, str]:
+    """canfdi-replay with its stderr on a pseudo-terminal: (exit status, what the terminal got)."""
+    import os
+    import pty
+    import select
+    master, slave = pty.openpty()
+    try:
+        p = subprocess.Popen([str(ROOT / ".venv" / "bin" / "canfdi-replay"), "-q", *args],
+                             stdout=subprocess.DEVNULL, stderr=slave)
+        os.close(slave)
+        got = b""
+        while True:
+            ready, _, _ = select.select([master], [], [], 120)
+            if not ready:
+                p.kill()
+                raise AssertionError("canfdi-replay hung")
+            try:
+                chunk = os.read(master, 65536)
+            except OSError:  # the terminal closed: the process is gone
+                break
+            if not chunk:
+                break
+            got += chunk
+        return p.wait(timeout=120), got.decode(errors="replace")
+    finally:
+        os.close(master)
+
+
+def test_progress_bar_on_a_terminal(tmp_path: Path) -> None:
+    """On a terminal a progress bar (over the bytes of a candump log the core reads, over the frames
+    of a format converted through python-can) is drawn on stderr and cleared at the end;
+    --no-progress draws none (and none off a terminal: test_command_line)."""
+    import can
+    log = make_sil_log(next(s for s in SCENARIOS if s.stem == "tps1_open"))
+    asc = tmp_path / "run.asc"
+    with can.Logger(str(asc)) as w:
+        for msg in can.LogReader(str(log)):
+            w.on_message_received(msg)
+    for path, unit in ((log, "B/s"), (asc, "frames")):
+        rc, term = _stderr_on_a_terminal([str(path)])
+        assert rc == 1
+        assert "replay:" in term and unit in term and term.endswith("\r"), term
+        rc, term = _stderr_on_a_terminal(["--no-progress", str(path)])
+        assert rc == 1 and term == "", term
+
+
+def test_closed_stdout(tmp_path: Path) -> None:
+    """The reader of the timeline goes away (`canfdi-replay LOG | head -0`): no traceback, the
+    exit status still says what was found, the JSON report is still written."""
+    log = make_sil_log(next(s for s in SCENARIOS if s.stem == "tps1_open"))
+    js = tmp_path / "r.json"
+    p = subprocess.Popen([str(ROOT / ".venv" / "bin" / "canfdi-replay"), str(log), "--json", str(js)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout is not None and p.stderr is not None
+    p.stdout.close()
+    err = p.stderr.read()
+    assert p.wait(timeout=120) == 1, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
+    assert [f["code"] for f in json.loads(js.read_text())["dtcs"]] == ["P0122"]

@@ -28,7 +28,7 @@ from typing import Any
 from . import DBC_PATH
 
 #: bump when the rows a task makes change (a cached result of another version is redone)
-TASK_VERSION = "canfdi-fleet-task/1"
+TASK_VERSION = "canfdi-fleet-task/2"
 SAMPLE_S = 0.1          # the core's sample interval ("s" events)
 TRACK_WINDOW_S = 5.0    # the parameter tracks' down-sampling window
 BITRATE = 1_000_000

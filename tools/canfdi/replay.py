@@ -31,8 +31,8 @@ from typing import IO, Any
 
 from . import DBC_PATH, REPO_ROOT
 from .catalogue import dtc_by_code
-from .replay_input import LogFormatError, Problems, log_format, messages, write_candump
-from .replay_report import Report, dumps, status_text
+from .replay_input import LogFormatError, Problems, log_format, numbered_messages, write_candump
+from .replay_report import Report, dumps, status_text, where
 
 CORE = REPO_ROOT / "build" / "bin" / "canfdi-replay-core"
 DEFAULT_BITRATE = 1_000_000
@@ -99,12 +99,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("logs", nargs="+", metavar="LOG", type=Path,
                    help="recorded logs: candump .log (and .log.gz), .asc, .blf, .trc, .csv, .mf4; "
                         "several are consecutive drives")
-    p.add_argument("--json", metavar="FILE", type=Path, help="write the JSON report (schema: tools/replay/README.md)")
+    p.add_argument("--json", metavar="FILE", type=Path, help="write the JSON report (schema: the docstring of tools/canfdi/replay_report.py)")
     p.add_argument("--html", metavar="FILE", type=Path,
                    help="write the HTML report: one self-contained file with the plots inline")
     p.add_argument("--map", metavar="FILE", type=Path,
                    help="map another DBC's frames and signals onto the supervisor's inputs "
-                        "(format: tools/replay/README.md)")
+                        "(format: the docstring of tools/canfdi/replay_map.py; example: tests/replay/data/vehicle.map)")
     g = p.add_argument_group("bus (python-can's flags)")
     g.add_argument("-c", "--channel", help="the channel in the log to judge (default: the first channel "
                                            "carrying a frame of dbc/canfdi.dbc)")
@@ -182,13 +182,12 @@ def _feed_fifos(logs: list[LogIn], problems: list[Problems], core: subprocess.Po
         os.set_blocking(fd, True)
         try:
             with os.fdopen(fd, "w", encoding="ascii", buffering=1 << 20) as out:
-                msgs = messages(lg.path, lg.fmt, problems[i]) if lg.fmt != "candump" else None
                 n = 0
                 if mapper is not None:
                     n = mapper.write(lg.path, lg.fmt, out, problems[i])
-                elif msgs is not None:
-                    n = write_candump(msgs, out, lg.path, problems[i],
-                                      progress=lambda k, i=i: prog.frames_at(i, k))
+                elif lg.fmt != "candump":
+                    n = write_candump(numbered_messages(lg.path, lg.fmt, problems[i]), out, lg.path, problems[i],
+                                      lg.fmt, progress=lambda k, i=i: prog.frames_at(i, k))
                 if n == 0 and problems[i].count == 0:
                     problems[i].add(lg.path, -1, "no frame in it" if mapper is None else
                                     "no frame of the map's messages in it")
@@ -306,6 +305,7 @@ def _run_core(a: argparse.Namespace, report: Report, core_bin: Path, logs: list[
         st.sha256 = hashes.get(i, "")
         st.input_problems = problems[i].items
         st.input_problem_count = problems[i].count
+        st.input_truncated = problems[i].truncated
     for msg in errors:
         print(f"canfdi-replay: {msg}", file=sys.stderr)
     stderr = b"".join(err_chunks).decode(errors="replace").strip()
@@ -330,7 +330,8 @@ def print_timeline(report: Report, a: argparse.Namespace, out: IO[str]) -> None:
             ag = lg.agree
             print(f"canfdi-replay: {lg.path} ({lg.fmt}, {eo.get('frames', 0)} frames, "
                   f"{eo.get('first_t', 0):.3f}-{eo.get('last_t', 0):.3f} s, time base {lg.clock or '-'}, "
-                  f"channel {lg.channel or '-'}), firmware {report.hdr.get('fw', '?')}", file=out)
+                  f"channel {lg.channel or '-'}), firmware {report.hdr.get('sw_version', '?')} "
+                  f"({report.hdr.get('fw', '?')}, calibration {report.hdr.get('calibration_id', '?')})", file=out)
             if lg.start == "power-up":
                 print(f"  start: at the recorded ECU's power-up ({lg.start_decided_by}); judged from the first step",
                       file=out)
@@ -416,12 +417,13 @@ def _print_not_judged(report: Report, i: int, out: IO[str]) -> None:
 
 def _print_quality(report: Report, i: int, bitrate: int, out: IO[str]) -> None:
     dq = report.data_quality(bitrate)[i]
+    fmt = report.logs[i].fmt
     parts = []
     if dq["bad_line_count"]:
         first = dq["bad_lines"][0]
-        parts.append(f"{dq['bad_line_count']} bad line(s) (first: line {first['line']}: {first['why']})")
+        parts.append(f"{dq['bad_line_count']} bad line(s) (first: {where(fmt, first['line'])}: {first['why']})")
     if dq["read_errors"]:
-        parts.append(f"read error at line {dq['read_errors'][0]['line']}: {dq['read_errors'][0]['why']}")
+        parts.append(f"read error at {where(fmt, dq['read_errors'][0]['line'])}: {dq['read_errors'][0]['why']}")
     if dq["gap_count"]:
         parts.append(f"{dq['gap_count']} gap(s) in the log (first {dq['gaps'][0]['from_s']:.3f}-"
                      f"{dq['gaps'][0]['to_s']:.3f} s)")
@@ -430,7 +432,7 @@ def _print_quality(report: Report, i: int, bitrate: int, out: IO[str]) -> None:
     if dq["time_stamp_outliers"]:
         first = dq["time_stamp_outliers_first"][0]
         parts.append(f"{dq['time_stamp_outliers']} time stamp(s) out of sequence, taken at the current time "
-                     f"(first: line {first['line']})")
+                     f"(first: {where(fmt, first['line'])})")
     for name, rej in dq["rejected_frames"].items():
         bad = {k: v for k, v in rej.items() if v}
         if bad:
@@ -443,7 +445,7 @@ def _print_quality(report: Report, i: int, bitrate: int, out: IO[str]) -> None:
         if dq[key]:
             parts.append(f"{dq[key]} {label}")
     for name, oc in dq["other_channels"].items():
-        parts.append(f"channel {name}: {oc['frames']} frames not judged (first line {oc['first_line']}; "
+        parts.append(f"channel {name}: {oc['frames']} frames not judged (first: {where(fmt, oc['first_line'])}; "
                      f"choose with -c)")
     if dq["unknown_ids"]:
         parts.append(f"{len(dq['unknown_ids'])} identifier(s) not in dbc/canfdi.dbc")
@@ -489,7 +491,13 @@ def main(argv: list[str] | None = None) -> int:
     rc = run(a, report)
     if rc != 0:
         return rc
-    print_timeline(report, a, sys.stdout)
+    try:
+        print_timeline(report, a, sys.stdout)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # the reader of the timeline went away (`| head`): the reports are still written
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
     doc = report.to_json(a.bitrate, "canfdi-replay")
     if a.json is not None:
         try:

@@ -24,7 +24,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (the backend first)
 
 from .replay_report import (DCM_CHANNELS, MONITORS, THR_CHANNELS, LogState, Report,  # noqa: E402
-                            _tf_intervals, status_text)
+                            _tf_intervals, status_text, where)
 
 RES_NAMES = ("dcm r1", "dcm r2", "dcm r3", "dcm r4", "thr CORR", "thr ARM", "thr POS1", "thr POS2")
 PAR_NAMES = ("R_A", "Ψ", "J", "friction M_c", "thr motor R", "thr K", "spring", "thr friction")
@@ -209,7 +209,8 @@ def write_html(report: Report, doc: dict[str, Any], path: Path) -> None:
                     "<h1>canfdi-replay: diagnosis of a recorded CAN log</h1>"]
     codes = sorted({f["code"] for f in doc["dtcs"]})
     h.append(f"<p><b>{'Trouble codes found: ' + ', '.join(codes) if codes else 'No trouble code found.'}</b> "
-             f"Firmware {_esc(doc['firmware']['id'])} ({_esc(doc['firmware']['calibration'])}); "
+             f"Firmware {_esc(doc['firmware']['sw_version'])} ({_esc(doc['firmware']['id'])}), calibration "
+             f"{_esc(doc['firmware']['calibration_id'])} ({_esc(doc['firmware']['calibration'])}); "
              f"DBC {_esc(doc['dbc'].get('path', ''))} sha256 {_esc(doc['dbc'].get('sha256', '')[:16])}…</p>")
     h.append("<h2>Logs</h2>")
     rows = []
@@ -276,17 +277,19 @@ def write_html(report: Report, doc: dict[str, Any], path: Path) -> None:
         h.append("<p class=ok>Every monitor was judged over every log.</p>")
     h.append("<h2>Data quality</h2>")
     for dq, lg in zip(doc["data_quality"], report.logs):
+        def at(line: int, fmt: str = lg.fmt) -> str:
+            return where(fmt, line)
         items = [["bad or unparsable lines", f"{dq['bad_line_count']}" + "".join(
-            f"<br>line {b['line']}: {_esc(b['why'])} <code>{_esc(b['text'])}</code>" for b in dq["bad_lines"][:20])],
-                 ["truncated / read errors", _esc("; ".join(f"line {r['line']}: {r['why']}" for r in dq["read_errors"])
+            f"<br>{at(b['line'])}: {_esc(b['why'])} <code>{_esc(b['text'])}</code>" for b in dq["bad_lines"][:20])],
+                 ["truncated / read errors", _esc("; ".join(f"{at(r['line'])}: {r['why']}" for r in dq["read_errors"])
                                                    or ("truncated" if dq["truncated"] else "none"))],
                  ["gaps in the log", f"{dq['gap_count']}" + "".join(
                      f"<br>{g['from_s']:.3f}–{g['to_s']:.3f} s" for g in dq["gaps"][:20])],
                  ["time stamps going back", f"{dq['time_stamps_back']}" + "".join(
-                     f"<br>line {b['line']} by {b['by_s'] * 1e3:.3f} ms" for b in dq["time_stamps_back_first"][:5])
-                  + "".join(f"<br>line {b['line']}: back {b['back_s']:.3f} s, re-based" for b in dq["rebased"])],
+                     f"<br>{at(b['line'])} by {b['by_s'] * 1e3:.3f} ms" for b in dq["time_stamps_back_first"][:5])
+                  + "".join(f"<br>{at(b['line'])}: back {b['back_s']:.3f} s, re-based" for b in dq["rebased"])],
                  ["time stamps out of sequence", f"{dq['time_stamp_outliers']}" + "".join(
-                     f"<br>line {o['line']}: stamped {o['stamp_s']:.6f} s, taken at {o['at_s']:.3f} s"
+                     f"<br>{at(o['line'])}: stamped {o['stamp_s']:.6f} s, taken at {o['at_s']:.3f} s"
                      for o in dq["time_stamp_outliers_first"][:5])],
                  ["rejected input frames", _esc("; ".join(
                      f"{n}: " + ", ".join(f"{k} {v}" for k, v in d.items() if v)
@@ -295,10 +298,10 @@ def write_html(report: Report, doc: dict[str, Any], path: Path) -> None:
                      f"{m['frame']} {'never received' if m['never_received'] else 'missing'} "
                      f"{m['from_s']:.3f}–{m['to_s']:.3f} s" for m in dq["missing_frames"][:20]) or "none")],
                  ["error frames", f"{dq['error_frames']}" + "".join(
-                     f"<br>line {e['line']} at {e['at_s']:.3f} s" for e in dq["error_frames_first"][:5])],
+                     f"<br>{at(e['line'])} at {e['at_s']:.3f} s" for e in dq["error_frames_first"][:5])],
                  ["CAN FD / remote / 29-bit frames", f"{dq['fd_frames']} / {dq['remote_frames']} / "
                                                      f"{dq['extended_frames']} (never fed to the supervisor)"],
-                 ["other channels", _esc(", ".join(f"{k}: {v['frames']} frames from line {v['first_line']}"
+                 ["other channels", _esc(", ".join(f"{k}: {v['frames']} frames from {at(v['first_line'])}"
                                                    for k, v in dq["other_channels"].items()) or "none")],
                  ["identifiers not in the DBC", _esc(", ".join(f"0x{k} ({v})" if not k.startswith("x") else
                                                                f"0x{k[1:]} 29-bit ({v})"

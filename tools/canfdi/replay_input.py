@@ -9,19 +9,40 @@ held in memory.
 
 Bad input never stops the replay: a text format's reader that raises on a
 line is resumed after that line (the line is reported with its number); a
-binary reader that raises ends that file, reported with the number of
-frames read before. Frames python-can returns are written as they are: the
-core counts CAN FD, remote and error frames and never feeds them to the
-supervisor. A negative or non-finite time stamp is reported and skipped.
+line python-can's ASC or TRC reader passes over without a frame is
+reported with its number too, unless it is one the format holds besides
+frames (blank lines, comments, the ASC header and trigger-block lines,
+ASC events with a time stamp that are not CAN frames: statistics, chip
+states, ...; TRC bus states and warnings); a binary reader that raises ends that file, reported with
+the number of frames read before, and a BLF file shorter than its header
+states is reported as truncated (python-can's reader ends there without a
+word). Frames python-can returns are written as they are: the core counts
+CAN FD, remote and error frames and never feeds them to the supervisor. A
+classic frame with fewer data bytes than its DLC (python-can's ASC reader
+makes one of a line cut in its data) and a negative or non-finite time
+stamp are reported and skipped.
+
+Each frame goes into the pipe at its place in the file: a text log's frame
+on the candump line of the same number (the lines between are written
+blank, which the core skips), a binary log's N-th frame on line N. The
+line numbers the core reports (error and CAN FD frames, time stamps going
+back, other channels) are therefore the file's own lines, or for BLF and
+MF4, which have no lines, the frame's number in the file.
 
     fmt = log_format(Path("run.blf"))            # 'blf'
-    for line, where in candump_lines(Path("run.blf"), problems): ...
+    for pos, msg in numbered_messages(Path("run.blf"), fmt, problems): ...
 """
 from __future__ import annotations
 
+import contextlib
+import gc
 import gzip
 import io
+import logging
 import math
+import os
+import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator, TextIO
@@ -32,6 +53,7 @@ import can
 PYCAN_FORMATS = {".asc": "asc", ".blf": "blf", ".trc": "trc", ".csv": "csv", ".mf4": "mf4"}
 CANDUMP_SUFFIXES = (".log", ".candump")
 TEXT_FORMATS = ("asc", "trc", "csv")
+BINARY_FORMATS = ("blf", "mf4")
 CAN_ERR_FLAG = 0x20000000
 
 
@@ -42,14 +64,16 @@ class LogFormatError(ValueError):
 @dataclass
 class Problems:
     """What reading met, as 'file:line: reason' lines (the first few kept)."""
-    items: list[tuple[str, int, str]] = field(default_factory=list)  # (file, line or -1, reason)
+    items: list[tuple[str, int, str, str]] = field(default_factory=list)  # (file, line or -1, reason, text)
     count: int = 0
     keep: int = 100
+    truncated: bool = False  # the rest of the file could not be read
 
-    def add(self, path: Path, line: int, why: str) -> None:
+    def add(self, path: Path, line: int, why: str, text: str = "") -> None:
+        """text: the line's first 80 characters, when it has one."""
         self.count += 1
         if len(self.items) < self.keep:
-            self.items.append((str(path), line, why))
+            self.items.append((str(path), line, why, text.rstrip("\r\n")[:80]))
 
 
 def _suffixes(path: Path) -> tuple[str, bool]:
@@ -127,25 +151,89 @@ def candump_line(msg: can.Message) -> str | None:
     return stamp + f"{ident}#{data[:16]}\n"
 
 
-class _CountingLines:
-    """A text file as an iterator of lines that counts them (for python-can's text readers)."""
+#: A line of an ASC file that holds no CAN frame by design: its header, comments, trigger
+#: blocks, and events with a time stamp that are not CAN frames (statistics, chip states, ...).
+_ASC_NOT_A_FRAME = re.compile(r"(//|date\s|base\s|(no\s+)?internal\s+events|begin\s+triggerblock|"
+                              r"end\s+triggerblock)", re.IGNORECASE)
+#: A TRC line that is a bus status by design: a warning or status event (v1.1/1.3 "Warng", v2.x
+#: "ST", "EC", "EV"), or v1.0's bus information on identifier FFFFFFFF.
+_TRC_STATUS = frozenset(("Warng", "ST", "EC", "EV", "FFFFFFFF"))
+_ASC_STAMPED = re.compile(r"\d+\.\d+\s")
+#: python-can's own test: a line its ASCReader reads as a CAN frame.
+_ASC_FRAME = re.compile(r"\d+\.\d+\s+(\d+\s+(\w+\s+(Tx|Rx)|ErrorFrame)|CANFD)", re.ASCII | re.IGNORECASE)
 
-    def __init__(self, f: TextIO) -> None:
+
+def _frame_expected(fmt: str, line: str, n: int) -> bool:
+    """The line should give a frame (a line of the format's other kinds does not)."""
+    s = line.strip()
+    if not s:
+        return fmt == "csv"          # python-can's CSV reader raises on a blank line: reported there
+    if fmt == "asc":
+        if _ASC_NOT_A_FRAME.match(s):
+            return False
+        return not _ASC_STAMPED.match(s) or bool(_ASC_FRAME.match(s))
+    if fmt == "trc":
+        return not s.startswith(";") and not _TRC_STATUS.intersection(s.split()[1:5])
+    return n > 1                     # csv: the header line
+
+
+_SKIPPED_WHY = {
+    "asc": "python-can's ASCReader reads no frame from this line; skipped",
+    "trc": "python-can's TRCReader reads no frame from this line (an error frame or another event type it "
+           "does not read, or too few columns); skipped",
+    "csv": "python-can's CSVReader reads no frame from this line; skipped",
+}
+
+
+class _CountingLines:
+    """A text file as an iterator of lines that counts them (for python-can's text readers), and
+    reports the lines that should hold a frame but gave none.
+
+    python-can's text readers read a line and yield its frame before they read the next one, so
+    a line that should give a frame (_frame_expected) and is still pending when the next line is
+    read was passed over: it goes to `skipped`. The reader's caller clears the pending line when
+    a frame comes (`gave_frame`) or when it reports the line itself (`reported`)."""
+
+    def __init__(self, f: TextIO, fmt: str, skipped: Callable[[int, str, str], None]) -> None:
         self.f = f
         self.n = 0
+        self.fmt = fmt
+        self.skipped = skipped
+        self.pending = 0
+        self.pending_text = ""
+        self.last = ""
+
+    def _seen(self, line: str) -> None:
+        self.flush()
+        self.n += 1
+        self.last = line
+        if _frame_expected(self.fmt, line, self.n):
+            self.pending = self.n
+            self.pending_text = line
+
+    def flush(self) -> None:
+        if self.pending:
+            self.skipped(self.pending, _SKIPPED_WHY[self.fmt], self.pending_text)
+            self.pending = 0
+
+    def gave_frame(self) -> None:
+        if self.pending == self.n:
+            self.pending = 0
+
+    reported = gave_frame
 
     def __iter__(self) -> "_CountingLines":
         return self
 
     def __next__(self) -> str:
         line = next(self.f)
-        self.n += 1
+        self._seen(line)
         return line
 
     def readline(self) -> str:
         line = self.f.readline()
         if line:
-            self.n += 1
+            self._seen(line)
         return line
 
     def read(self, size: int = -1) -> str:
@@ -178,24 +266,47 @@ class _FakeHeader:
 _TEXT_READERS: dict[str, type] = {"asc": can.ASCReader, "trc": can.TRCReader, "csv": can.CSVReader}
 
 
-def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterator[can.Message]:
-    """A text log through python-can's reader, resumed after every line it raises on."""
+#: python-can's TRC reader logs the lines it cannot parse as warnings; they are reported here
+#: with their numbers instead.
+logging.getLogger("can.io.trc").setLevel(logging.ERROR)
+
+
+@contextlib.contextmanager
+def _quiet_destructors() -> Iterator[None]:
+    """asammdf's MDF object raises in its destructor when opening a damaged file failed; the failure
+    is reported as the file's problem, the destructor's exception would only print a traceback."""
+    old = sys.unraisablehook
+    sys.unraisablehook = lambda _u: None
+    try:
+        yield
+    finally:
+        gc.collect()
+        sys.unraisablehook = old
+
+
+def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterator[tuple[int, can.Message]]:
+    """A text log through python-can's reader, resumed after every line it raises on: (line, frame)."""
     raw: TextIO = gzip.open(path, "rt", encoding="utf-8", errors="replace") if gz \
         else open(path, encoding="utf-8", errors="replace")
-    lines = _CountingLines(raw)
+    lines = _CountingLines(raw, fmt, lambda n, why, text: problems.add(path, n, why, text))
     cls = _TEXT_READERS[fmt]
     try:
         reader = cls(lines)
         while True:
             try:
                 for msg in reader:
-                    yield msg
+                    lines.gave_frame()
+                    yield lines.n, msg
+                lines.flush()
                 return
             except (ValueError, IndexError, KeyError, TypeError, OverflowError) as e:
+                lines.reported()
                 problems.add(path, lines.n, f"python-can's {cls.__name__} cannot read this line "
-                             f"({type(e).__name__}: {e}); skipped")
+                             f"({type(e).__name__}: {e}); skipped", lines.last)
             except (OSError, EOFError, gzip.BadGzipFile) as e:
+                lines.reported()
                 problems.add(path, lines.n, f"read error, the rest of the file is lost: {e}")
+                problems.truncated = True
                 return
             # resume after the bad line with the reader's state (base, start time)
             state = {k: v for k, v in vars(reader).items() if k != "file"}
@@ -208,20 +319,29 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
         raw.close()
 
 
-def _binary_messages(path: Path, fmt: str, problems: Problems) -> Iterator[can.Message]:
+def _binary_messages(path: Path, fmt: str, problems: Problems) -> Iterator[tuple[int, can.Message]]:
     n = 0
-    try:
-        reader = can.BLFReader(path) if fmt == "blf" else can.LogReader(path)
-    except Exception as e:  # noqa: BLE001 — any reader failure is a message, never a crash
-        problems.add(path, -1, f"python-can cannot open it as {fmt.upper()}: {type(e).__name__}: {e}")
-        return
+    with _quiet_destructors():
+        try:
+            reader = can.BLFReader(path) if fmt == "blf" else can.LogReader(path)
+        except Exception as e:  # noqa: BLE001 — any reader failure is a message, never a crash
+            problems.add(path, -1, f"python-can cannot open it as {fmt.upper()}: {type(e).__name__}: {e}")
+            return
     try:
         for msg in reader:
             n += 1
-            yield msg
+            yield n, msg
+        # python-can's BLF reader ends without a word where a cut file ends; its header knows the size
+        stated = int(getattr(reader, "file_size", 0) or 0) if fmt == "blf" else 0
+        size = os.path.getsize(path)
+        if size < stated:
+            problems.add(path, -1, f"truncated: {size} of the {stated} bytes its header states; the frames "
+                         f"after frame {n} are lost")
+            problems.truncated = True
     except Exception as e:  # noqa: BLE001 — a damaged binary log ends here, reported
         problems.add(path, -1, f"python-can's reader stopped after frame {n}: {type(e).__name__}: {e}; "
                      f"the rest of the file is not read")
+        problems.truncated = True
     finally:
         try:
             reader.stop()
@@ -229,25 +349,60 @@ def _binary_messages(path: Path, fmt: str, problems: Problems) -> Iterator[can.M
             pass
 
 
-def messages(path: Path, fmt: str, problems: Problems) -> Iterator[can.Message]:
-    """Every frame python-can reads from a non-candump log; problems reported, never raised."""
+def numbered_messages(path: Path, fmt: str, problems: Problems) -> Iterator[tuple[int, can.Message]]:
+    """Every frame python-can reads from a non-candump log with its place in the file (its line in
+    a text format, its number in BLF and MF4); problems reported, never raised."""
     _, gz = _suffixes(path)
     if fmt in TEXT_FORMATS:
         return _text_messages(path, fmt, gz, problems)
     return _binary_messages(path, fmt, problems)
 
 
-def write_candump(msgs: Iterator[can.Message], out: io.TextIOBase | TextIO, path: Path, problems: Problems,
-                  progress: Callable[[int], None] | None = None) -> int:
-    """Writes msgs as candump text; returns the frames written."""
+def messages(path: Path, fmt: str, problems: Problems) -> Iterator[can.Message]:
+    """Every frame python-can reads from a non-candump log; problems reported, never raised."""
+    return (msg for _, msg in numbered_messages(path, fmt, problems))
+
+
+def short_data(msg: can.Message) -> bool:
+    """A classic data frame with fewer data bytes than its DLC 0..8 says (python-can's ASC reader
+    makes one of a line cut in its data: "d 8 A" is one byte, 0x0A)."""
+    return (not msg.is_fd and not msg.is_remote_frame and not msg.is_error_frame and msg.dlc <= 8
+            and len(msg.data) < msg.dlc)
+
+
+class PlacedWriter:
+    """Writes candump lines into the core's pipe, each on the line of the given number (the lines
+    between blank), so that the core's line numbers are the file's (see the module docstring)."""
+
+    def __init__(self, out: io.TextIOBase | TextIO) -> None:
+        self.out = out
+        self.lines = 0
+
+    def write(self, pos: int, line: str) -> None:
+        if pos - 1 > self.lines:
+            self.out.write("\n" * (pos - 1 - self.lines))
+            self.lines = pos - 1
+        self.out.write(line)
+        self.lines += 1
+
+
+def write_candump(msgs: Iterator[tuple[int, can.Message]], out: io.TextIOBase | TextIO, path: Path,
+                  problems: Problems, fmt: str, progress: Callable[[int], None] | None = None) -> int:
+    """Writes numbered_messages() as candump text, each frame at its place; returns the frames written."""
+    w = PlacedWriter(out)
     n = 0
-    for i, msg in enumerate(msgs, 1):
+    for pos, msg in msgs:
+        where = (f"frame {pos}", -1) if fmt in BINARY_FORMATS else ("frame", pos)
+        if short_data(msg):
+            problems.add(path, where[1], f"{where[0]}: {len(msg.data)} data bytes, its DLC says {msg.dlc} (a cut "
+                         f"line?); skipped")
+            continue
         line = candump_line(msg)
         if line is None:
-            problems.add(path, -1, f"frame {i}: time stamp {msg.timestamp!r} is negative, not finite or "
+            problems.add(path, where[1], f"{where[0]}: time stamp {msg.timestamp!r} is negative, not finite or "
                          f"beyond the year 33658; skipped")
             continue
-        out.write(line)
+        w.write(pos, line)
         n += 1
         if progress is not None and (n & 0x3FFF) == 0:
             progress(n)

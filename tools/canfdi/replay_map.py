@@ -35,7 +35,11 @@ and ranges as always. Setpoints the map does not give leave the setpoint
 checks (U1A50, U1A51) not judged: they are not in the recording. The models need a sample every 1 ms: a frame mapped
 at another rate leaves its plant's models not judged, with the reason.
 Frames of the other bus are decoded with cantools; those of the
-supervisor are encoded with cantools from dbc/canfdi.dbc.
+supervisor are encoded with cantools from dbc/canfdi.dbc. A frame made
+from a message goes into the core's pipe on that message's line of the
+file (its number in BLF and MF4; tools/canfdi/replay_input.py), so the
+lines the report names are the file's; a line of a candump log that is no
+frame is reported with its number.
 """
 from __future__ import annotations
 
@@ -44,14 +48,14 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, Iterator, TextIO
 
 import cantools
 from cantools.database.can import Database
 
 from . import DBC_PATH
 from .e2e import protect, protected_ids
-from .replay_input import Problems, candump_line, messages
+from .replay_input import PlacedWriter, Problems, candump_line, numbered_messages
 from .timeline import load_db
 
 #: The supervisor's frames a map may fill, and which plant's models use them.
@@ -280,13 +284,9 @@ class Mapper:
         import can  # noqa: PLC0415 — only a map needs Message objects here
         n = 0
         undecodable = 0
-        if fmt == "candump":
-            from .logio import ReadStats, read_log
-            st = ReadStats()
-            src = read_log(path, st)
-        else:
-            src = messages(path, fmt, problems)
-        for msg in src:
+        w = PlacedWriter(out)
+        src = _candump_numbered(path, problems) if fmt == "candump" else numbered_messages(path, fmt, problems)
+        for pos, msg in src:
             if msg.is_error_frame or msg.is_remote_frame:
                 continue
             pairs = self.by_source.get(msg.arbitration_id)
@@ -313,7 +313,7 @@ class Mapper:
                 line = candump_line(can.Message(timestamp=msg.timestamp, arbitration_id=frame[0],
                                                 is_extended_id=False, data=frame[1], channel=msg.channel))
                 if line is not None:
-                    out.write(line)
+                    w.write(pos, line)
                     n += 1
         return n
 
@@ -337,6 +337,30 @@ class Mapper:
             protect(msg.frame_id, data, fs.counter)
             fs.counter = (fs.counter + 1) & 0x0F
         return msg.frame_id, bytes(data)
+
+
+def _candump_numbered(path: Path, problems: Problems) -> Iterator[tuple[int, Any]]:
+    """The frames of a candump log (also .gz) with their line numbers; a bad line is reported with
+    its number and skipped."""
+    import gzip  # noqa: PLC0415
+
+    from .logio import parse_candump_line  # noqa: PLC0415
+    opener: Any = gzip.open if path.suffix.lower() == ".gz" else open
+    n = 0
+    try:
+        with opener(path, "rt", encoding="ascii", errors="replace") as f:
+            for n, line in enumerate(f, 1):
+                if line.startswith("#"):
+                    continue
+                try:
+                    msg = parse_candump_line(line)
+                except (ValueError, OverflowError) as e:
+                    problems.add(path, n, f"not a candump frame ({e}); skipped", line)
+                    continue
+                if msg is not None:
+                    yield n, msg
+    except (OSError, EOFError) as e:
+        problems.add(path, n + 1, f"read error, the rest of the file is lost: {e}")
 
 
 def _num(path: Path, no: int, word: str, val: str) -> float:

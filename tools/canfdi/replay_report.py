@@ -8,31 +8,74 @@ again; one that only failed while nothing could be judged is listed with
 the monitor's span under ``not_judged``, never as a finding.
 
 The JSON report (``Report.to_json``) has this schema (version
-``canfdi-replay/1``; times are seconds on each log's own time base):
+``canfdi-replay/1``; times are seconds on each log's own time base;
+tests/replay/test_replay_report.py checks that every key of a report is
+named here):
 
-    schema, tool, firmware {id, calibration}, dbc {path, sha256},
-    map {path, sha256, dbc, dbc_sha256, checks_not_applied} | null,
-    logs [{index, path, format, sha256, lines, frames, steps, first_s, last_s,
-           clock, grid_moves (timestamps clock: times the step grid followed
-           the sensor frames, tools/replay/README.md), channel, start,
-           start_decided_by, settled_from_s,
-           recorded_ecu {frames, identical, differing, recorded_only,
-                         replay_only, first_difference}}],
-    dtcs [{code, description, log, first_failed_s, status, status_bits,
-           occurrence, freeze_frame, confidence_pct, confidence_basis,
-           degradation {dcm, thr}, evidence {...}, recorded_ecu_first_failed_s}],
-    recorded_ecu_only [{code, log, first_failed_s, judged, why}],
-    not_judged [{log, monitor, codes, spans [{from_s, to_s, why}], seconds,
-                 fraction}],
-    data_quality {per log: bad_lines [...], bad_line_count, gaps [...],
-                  time_stamps_back, rebased [...], crc/counter/length/
-                  implausible/timeouts per frame, error_frames [...],
-                  fd_frames, remote_frames, extended_frames,
-                  other_channels, unknown_ids, recorded_commands_bad_crc,
+    schema        "canfdi-replay/1"
+    tool          the program that wrote it ("canfdi-replay")
+    firmware      {id: a hash of the firmware's sources ("fw-sha256:..."),
+                   sw_version: the software version the ECU reports (UDS DID
+                   F195), calibration: the calibration the replay runs
+                   (canfdi_app_default_cal), calibration_id: its id (DID F182)}
+    dbc           {path, sha256} of dbc/canfdi.dbc
+    map           null; with --map {path, sha256, dbc, dbc_sha256 (the other
+                  bus's DBC), inputs {input: its source}, codes_not_applied
+                  {code: why}, models_not_judged {plant: why}}
+    settle_s      the settling time after a mid-drive start or a gap
+    logs          per log, in command-line order: [{index, path, format
+                  (candump asc blf trc csv mf4), sha256 (of the file), lines
+                  (candump lines the core read: a text format's lines up to its
+                  last frame, BLF/MF4 frames), frames, steps, first_s, last_s,
+                  clock (timestamps, simstep), grid_moves (timestamps clock:
+                  times the step grid followed the sensor frames,
+                  tools/replay/README.md), channel, start (power-up, mid-drive),
+                  start_decided_by (frames, option), settled_from_s (the models
+                  judged from here), recorded_ecu {frames, identical, differing,
+                  recorded_only, replay_only, first_difference {t, id,
+                  recorded, replay} | null}}]
+    dtcs          one per trouble code the replay found, by log and time:
+                  [{code ("P0122"), description, log (index),
+                  first_failed_s (the finding: the first time its testFailed
+                  bit is set while one of its monitors is judged),
+                  first_testfailed_s (when that testFailed bit rose: earlier
+                  only when it rose in a span not judged), status_at_finding
+                  (UDS status byte then), status (the status byte at the end of
+                  the last log), status_bits {TF, TFTOC, PDTC, CDTC, TNCSLC,
+                  TFSLC, TNCTOC, WIR} of it, occurrence, freeze_frame (SI units,
+                  the core's "mem" event) | null, confidence_pct | null,
+                  confidence_basis, degradation {dcm, thr} at the finding,
+                  evidence {components [{component, symptoms, normalised,
+                  fired, result}], flags, residuals_over_threshold,
+                  parameter_deviation_pct, rules [{fault, kind, pattern,
+                  required, forbidden, note}]}, recorded_ecu_first_failed_s |
+                  null}]
+    recorded_ecu_only  codes the recorded ECU reported that the replay did not
+                  find: [{code, log, first_failed_s, judged (its monitors were
+                  judged there), why}]
+    not_judged    per log and monitor with spans not judged: [{log, monitor,
+                  what, codes, spans [{from_s, to_s, why}] (the first 200),
+                  span_count, seconds, fraction (of the log)}]
+    data_quality  per log: [{log, bad_line_count, bad_lines [{line, why, text}]
+                  (line: the file's line; for BLF and MF4 the frame's number;
+                  -1 the file as a whole), read_errors [{line, why}], truncated,
+                  gaps [{from_s, to_s, seconds}], gap_count, time_stamps_back,
+                  time_stamps_back_first [{line, at_s, by_s}], rebased [{line,
+                  at_s, back_s}], time_stamp_outliers, time_stamp_outliers_first
+                  [{line, at_s, stamp_s}], rejected_frames {frame: {length, crc,
+                  counter, implausible, timeouts}}, accepted_frames {frame: n},
+                  error_frames, error_frames_first [{line, at_s}], fd_frames,
+                  fd_first_line, remote_frames, extended_frames, other_channels
+                  {name: {frames, first_line}}, unknown_ids {hex id ("x" prefix:
+                  29-bit): frames}, recorded_commands_bad_crc,
                   recorded_ecu_dtc_frames_failing_e2e (forged or corrupted
-                  EcuDtc frames, not taken as the ECU's), bus_load_pct {mean, max},
-                  missing_frames [...], read_errors [...]},
-    exit_status
+                  EcuDtc frames, not taken as the ECU's), simstep_rejected,
+                  bus_load_pct {bitrate, mean, max, note}, missing_frames
+                  [{frame, from_s, to_s, never_received}], rx_errors_per_second
+                  [{t, frame, length, crc, counter, implausible, timeouts}] (the
+                  first 200)}]
+    exit_status   1 a code found, else 0 (canfdi-replay exits 3 instead of 0
+                  when nothing could be judged)
 """
 from __future__ import annotations
 
@@ -107,6 +150,13 @@ def status_text(st: int) -> str:
     return "testFailed" if st & 0x01 else "passed"
 
 
+def where(fmt: str, line: int) -> str:
+    """A place in a log as a person reads it: "line N", for BLF and MF4 (no lines) "frame N"."""
+    if line < 0:
+        return "the file"
+    return f"{'frame' if fmt in ('blf', 'mf4') else 'line'} {line}"
+
+
 def status_bits(st: int) -> dict[str, int]:
     return {name: (st >> i) & 1 for i, name in enumerate(STATUS_BITS)}
 
@@ -159,8 +209,9 @@ class LogState:
     outliers: list[dict[str, Any]] = field(default_factory=list)
     fd: list[dict[str, Any]] = field(default_factory=list)
     readerr: list[dict[str, Any]] = field(default_factory=list)
-    input_problems: list[tuple[str, int, str]] = field(default_factory=list)
+    input_problems: list[tuple[str, int, str, str]] = field(default_factory=list)
     input_problem_count: int = 0
+    input_truncated: bool = False
 
     @property
     def last_t(self) -> float:
@@ -500,9 +551,9 @@ class Report:
                 "log": lg.index,
                 "bad_line_count": int(eo.get("bad_lines", 0)) + lg.input_problem_count,
                 "bad_lines": [{"line": b["line"], "why": b["why"], "text": b["text"]} for b in lg.bad]
-                + [{"line": ln, "why": why, "text": ""} for _, ln, why in lg.input_problems],
+                + [{"line": ln, "why": why, "text": text} for _, ln, why, text in lg.input_problems],
                 "read_errors": [{"line": r["line"], "why": r["why"]} for r in lg.readerr],
-                "truncated": bool(eo.get("truncated", False)) or bool(lg.readerr),
+                "truncated": bool(eo.get("truncated", False)) or bool(lg.readerr) or lg.input_truncated,
                 "gaps": [{"from_s": a, "to_s": b, "seconds": round(b - a, 6)} for a, b in lg.gaps],
                 "gap_count": int(eo.get("gaps", 0)),
                 "time_stamps_back": int(eo.get("back", 0)),
@@ -558,7 +609,9 @@ class Report:
         return {
             "schema": SCHEMA,
             "tool": tool,
-            "firmware": {"id": self.hdr.get("fw", ""), "calibration": "canfdi_app_default_cal"},
+            "firmware": {"id": self.hdr.get("fw", ""), "sw_version": self.hdr.get("sw_version", ""),
+                         "calibration": "canfdi_app_default_cal",
+                         "calibration_id": self.hdr.get("calibration_id", "")},
             "dbc": self.dbc,
             "map": self.map_info,
             "logs": [self._log_json(lg) for lg in self.logs],

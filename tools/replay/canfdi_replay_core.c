@@ -191,6 +191,16 @@ static void ev_str(const char *s, size_t n)
 
 static void ev_q16(int32_t v) { fprintf(ev, "%.5g", (double)v / 65536.0); }
 
+/* A UDS identification string (16 bytes padded with spaces), without the padding. */
+static void ev_ident(const uint8_t *p)
+{
+  size_t n = CANFDI_UDS_ID_BYTES;
+  while ((n > 0U) && (p[n - 1U] == (uint8_t)' ')) {
+    n--;
+  }
+  ev_str((const char *)p, n);
+}
+
 /* ------------------------------------------------------------ state */
 
 typedef struct {
@@ -2167,9 +2177,12 @@ int main(int argc, char **argv)
       rp.cal.rx.frame[f].timeout_cycles = (uint8_t)((c > 255U) ? 255U : c);
     }
   }
-  fprintf(ev, "{\"ev\":\"hdr\",\"core\":\"" PROG "\",\"fw\":\"%s\",\"step_us\":%d,\"settle_s\":%.3f,\"gap_s\":%.3f,"
-              "\"every_s\":%.3f,\"thr_pos\":{",
-          REPLAY_FW_ID, STEP_US, (double)opt.settle_us * 1e-6, (double)opt.gap_us * 1e-6, (double)opt.every_us * 1e-6);
+  fprintf(ev, "{\"ev\":\"hdr\",\"core\":\"" PROG "\",\"fw\":\"%s\",\"sw_version\":", REPLAY_FW_ID);
+  ev_ident(rp.cal.uds.ident.sw_version);
+  fprintf(ev, ",\"calibration_id\":");
+  ev_ident(rp.cal.uds.ident.calibration_id);
+  fprintf(ev, ",\"step_us\":%d,\"settle_s\":%.3f,\"gap_s\":%.3f,\"every_s\":%.3f,\"thr_pos\":{", STEP_US,
+          (double)opt.settle_us * 1e-6, (double)opt.gap_us * 1e-6, (double)opt.every_us * 1e-6);
   {
     /* the parameter thresholds of the diagnosis, for the plots */
     const canfdi_diagnosis_cfg_t *d = &rp.cal.diagnosis;
