@@ -87,8 +87,10 @@ def test_two_drives_carry_the_memory(tmp_path: Path) -> None:
     assert doc["logs"][1]["recorded_ecu"]["first_difference"]["t"] == pytest.approx(0.0, abs=0.01)
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="no headless Chromium (make deps installs chromium-headless-shell)")
 def test_html_report_in_a_browser(demo_log: Path, tmp_path: Path) -> None:
+    # make deps installs chromium-headless-shell: without it this test fails
+    # rather than pass without having looked at the page
+    assert CHROMIUM is not None, "no headless Chromium: run make deps (chromium-headless-shell)"
     html = tmp_path / "report.html"
     rc, doc, _, _ = run_replay([str(demo_log), "--html", str(html)], tmp_path)
     assert rc == 1 and html.exists()
