@@ -4,6 +4,8 @@
  */
 #include "diag/canfdi_dtcroute.h"
 
+#include <string.h>
+
 #include "core/canfdi_count.h"
 #include "diag/canfdi_diagnosis.h"
 
@@ -41,6 +43,8 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       r->p2135_dtc = index_of(dtc, CANFDI_DTC_P2135);
       r->p2135_n = 0U;
       r->faults = 0U;
+      r->agg_last_valid = false;
+      r->changes_last = 0U;
       r->diag = (canfdi_dtcroute_diag_t){0};
       r->initialised = true;
       rc = CANFDI_OK;
@@ -114,12 +118,26 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
     }
     combine_faults(r, in, agg);
     p2135(r, in, agg);
-    for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
-      if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
-        rc += report(r, dtc, (uint8_t)j,
-                     (agg[j] > 0) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, in->ff);
+    if (r->agg_last_valid && dtc->cycle_active && (dtc->changes == r->changes_last) &&
+        (memcmp(agg, r->agg_last, sizeof agg) == 0)) {
+      /* the same verdicts to an unchanged memory: nothing would change
+       * (the header); counted as given */
+      for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
+        if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
+          canfdi_count_inc(&r->diag.reports);
+        }
       }
+    } else {
+      for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
+        if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
+          rc += report(r, dtc, (uint8_t)j,
+                       (agg[j] > 0) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, in->ff);
+        }
+      }
+      (void)memcpy(r->agg_last, agg, sizeof agg);
+      r->agg_last_valid = (rc == 0);
     }
+    r->changes_last = dtc->changes;
     /* Source 3: the input supervision's monitors (raw per-step results),
      * combined per DTC: several monitors share U1A50/U1A51, whose
      * debouncer must see one report per step (a failure dominates) */

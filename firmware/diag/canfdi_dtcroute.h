@@ -25,6 +25,11 @@
  *      if any ran (one report per step is what the debouncer counts).
  * The DTC table index of every fault, monitor and of P2135 is looked up
  * once at init (a linear search per code), so a step costs no search.
+ * Sources 1 and 2 give PASSED or FAILED, which the DTC memory's debouncer
+ * takes at once; reported again to a memory that has not changed since
+ * (its `changes` counter, which every status and clear and cycle moves),
+ * the same verdicts change nothing: such a step counts them as reported
+ * and gives them no second time (a steady state, most steps).
  *
  * Faults for the manager (canfdi_dtcroute_manager_faults): a communication
  * fault while its trouble code has testFailed (qualified by the DTC memory's
@@ -76,6 +81,9 @@ typedef struct {
   uint8_t p2135_dtc;                                               /* DTC index or NONE */
   uint16_t p2135_n;   /* steps the disagreement stayed unisolated */
   uint32_t faults;    /* latched fault bits for the manager */
+  int8_t agg_last[CANFDI_CFG_DTC_MAX_DTCS]; /* sources 1-2 as last reported */
+  uint32_t changes_last; /* dtc->changes after they were last reported */
+  bool agg_last_valid;
   canfdi_dtcroute_diag_t diag;
   bool initialised;
 } canfdi_dtcroute_t;

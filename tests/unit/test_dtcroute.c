@@ -74,6 +74,44 @@ START_TEST(test_fault_reaches_its_codes)
 }
 END_TEST
 
+/* The same verdicts in a steady state are not given twice, but are again
+ * as soon as the memory changed: a code cleared by a tester while its
+ * fault persists fails again in the next step, and one passing before a
+ * new operation cycle passes in it (testNotCompletedThisOperationCycle
+ * cleared). */
+START_TEST(test_steady_verdicts_after_a_change)
+{
+  const uint32_t f = CANFDI_FAULT_DCM_IA_SENSOR_OFFSET;
+  const uint32_t code = canfdi_catalogue_fault[f].dtc[0];
+  const uint32_t g = CANFDI_FAULT_DCM_RA_UP;
+  const uint32_t code_g = canfdi_catalogue_fault[g].dtc[0];
+  canfdi_dtcroute_in_t in;
+  uint32_t k;
+  uint32_t reports0;
+  setup();
+  report[f] = CANFDI_DIAG_REPORT_FAILED;
+  report[g] = CANFDI_DIAG_REPORT_PASSED;
+  in = in_of(0U, false, false);
+  for (k = 0U; k < 3U; k++) {
+    ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), 0);
+  }
+  ck_assert_uint_ne(status_of(code) & CANFDI_DTC_ST_TF, 0U);
+  reports0 = r.diag.reports;
+  ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), 0);
+  ck_assert_uint_eq(r.diag.reports, reports0 + 2U); /* counted as given */
+  ck_assert_int_eq(canfdi_dtc_clear(&dtc, code), CANFDI_OK);
+  ck_assert_uint_eq(status_of(code) & CANFDI_DTC_ST_TF, 0U);
+  ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), 0);
+  ck_assert_uint_ne(status_of(code) & CANFDI_DTC_ST_TF, 0U);
+  ck_assert_int_eq(canfdi_dtc_cycle_end(&dtc), CANFDI_OK);
+  ck_assert_int_eq(canfdi_dtc_cycle_start(&dtc), CANFDI_OK);
+  ck_assert_uint_ne(status_of(code_g) & CANFDI_DTC_ST_TNCTOC, 0U);
+  ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), 0);
+  ck_assert_uint_eq(status_of(code_g) & CANFDI_DTC_ST_TNCTOC, 0U);
+  ck_assert_uint_ne(status_of(code) & CANFDI_DTC_ST_TFTOC, 0U);
+}
+END_TEST
+
 /* P0122 is fed by TPS1 open and both-TPS-lost: it fails if either fails,
  * passes only when none fails. */
 START_TEST(test_shared_code)
@@ -267,6 +305,7 @@ static Suite *make_suite(void)
   TCase *tc = tcase_create("routing");
   tcase_add_loop_test(tc, test_fault_reaches_its_codes, 0, (int)CANFDI_FAULT_COUNT - 1);
   tcase_add_test(tc, test_shared_code);
+  tcase_add_test(tc, test_steady_verdicts_after_a_change);
   tcase_add_test(tc, test_manager_findings);
   tcase_add_test(tc, test_p2135_persistence);
   tcase_add_test(tc, test_com_monitors);
