@@ -29,7 +29,7 @@
  * the frame due: a DTC count (32 status reads) for EcuStatus, a pass over
  * the DTCs and one record read for the cyclic EcuDtc, two isolated-fault
  * reads for EcuDiagnosis; then canfdi_tx_step.
- * Memory: sizeof(canfdi_app_out_t) = 56 bytes on a 32-bit target with the
+ * Memory: sizeof(canfdi_app_out_t) = 60 bytes on a 32-bit target with the
  * product's 32 DTCs. No heap.
  */
 #ifndef CANFDI_APP_OUT_H

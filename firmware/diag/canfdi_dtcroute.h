@@ -39,11 +39,14 @@
  * Scaling and overflow: no arithmetic besides the persistence count
  * (uint16_t, stops at p2135_steps) and the saturating counters.
  * Cost per canfdi_dtcroute_step: one pass over the faults (32 x 2 table
- * reads), two over the DTCs (32 reports at most each, each a
- * canfdi_dtc_report), 20 monitor bits. manager_faults: one pass over the faults, a status read
- * per communication fault.
- * Memory: sizeof(canfdi_dtcroute_t) = 112 bytes on a 32-bit target (the
- * index tables 64 + 20, state, config, diagnostics). No heap.
+ * reads), a compare of the 32 verdicts with the last ones, two passes over
+ * the DTCs (32 reports at most each, each a canfdi_dtc_report; the first
+ * only when the verdicts or the memory changed), 20 monitor bits.
+ * manager_faults: one pass over the faults, a status read per
+ * communication fault.
+ * Memory: sizeof(canfdi_dtcroute_t) = 152 bytes on a 32-bit target (the
+ * index tables 64 + 20, the last verdicts 32, state, config,
+ * diagnostics). No heap.
  */
 #ifndef CANFDI_DTCROUTE_H
 #define CANFDI_DTCROUTE_H
