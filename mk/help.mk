@@ -74,6 +74,7 @@ Benchmarks (figures on stdout and in $(BUILD)/bench/*.json; never fail on a figu
   make sil-bench            host instructions per canfdi_app_step
   make bench-hil            lockstep steps/s and real-time deadline misses in the vcan sandbox
   make bench-pil            PIL figures incl. the demo, and the RLS update vs textbook float/double/FPU
+  make bench-pil-profile    where the step's instructions go on QEMU M4/M0: per module, per slot, costliest steps
   make bench-replay         canfdi-replay on a one-hour log against python-can reading/decoding it
   make bench-replay-settle  the settling time of a mid-drive log: SIL recordings cut and replayed
   make bench-replay-jitter  SIL fault recordings re-stamped with jitter and clock drift, replayed

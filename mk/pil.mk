@@ -89,6 +89,25 @@ bench-pil: $(PIL_SIL_BIN) $(PIL_ELFS) $(RLS_PIL_ELFS)
 
 BENCH_STEPS += bench-pil
 
+# Where the instructions of canfdi_app_step go: the M4 and M0 PIL images run
+# with QEMU's execution trace on a fault scenario of each plant, split per
+# function and firmware module, per slot of the rate schedule and for the
+# costliest steps (tests/pil/pil_profile.py; $(BUILD)/bench/pil_profile.json).
+# A few minutes: a bench, not a test.
+PIL_PROFILE_SCN := tests/sil/scenarios/dcm_ia_offset.scn tests/sil/scenarios/thr_crc.scn
+.PHONY: bench-pil-profile
+bench-pil-profile: $(PIL_SIL_BIN) $(PIL_ELFS)
+	@rm -f $(BUILD)/bench/pil_profile.json; mkdir -p $(BUILD)/bench
+	@set -e; for scn in $(PIL_PROFILE_SCN); do \
+	  n=$$(basename $$scn .scn); d=$(PIL_DIR)/profile/$$n; mkdir -p $$d; \
+	  $(PIL_SIL_BIN) -q -s $$scn -l $$d/pil.log >/dev/null || test -s $$d/pil.log; \
+	  for m in m4:$(call pil_qemu,m4) m0:$(call pil_qemu,m0); do \
+	    python3 tests/pil/pil_profile.py --elf $(PIL_DIR)/pil_step_$${m%%:*}.elf --machine $${m#*:} \
+	      --run-dir $$d --name $$n --json $(BUILD)/bench/pil_profile.json; \
+	  done; done
+
+BENCH_STEPS += bench-pil-profile
+
 # The step's cost on hostile input: fuzz_app_rx's inputs (its corpus, its
 # regressions and, at most PIL_COST_FOUND of them, what `make fuzz` or
 # fuzz-test found: build/fuzz/found/app_rx) written out as one log by the
