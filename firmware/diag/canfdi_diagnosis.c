@@ -69,7 +69,7 @@ void canfdi_diagnosis_default_cfg(canfdi_diagnosis_cfg_t *cfg)
     cfg->isolate_steps = 20U;
     cfg->conf_min_pct = 50U;
     cfg->margin_pct = 10U;
-    cfg->par_fresh_updates = 20U;
+    cfg->par_fresh_updates = 12U;
     cfg->par_memory_updates = 100U;
     /* 1 % = 655.36 in Q16.16 */
     cfg->dcm_par_pos_q16[CANFDI_SYM_DCM_P_RA] = 5243;   /* +8 % */

@@ -384,7 +384,10 @@ typedef struct {
 /*
  * Defaults: on 1.0, off 0.8; cap 4; symptom persistence 20 ms on / 50 ms
  * off; flags 10 ms / 10 ms; isolation 20 ms; conf_min 50 %, margin 10
- * points. Parameter thresholds (+ / -): DC motor R_A +8 % / -20 % (the
+ * points; a parameter's zero counts after 12 updates of its estimator
+ * since the symptoms appeared (60 ms of the DC motor's armature
+ * estimator, 24 ms of the throttle's electrical one), and the flux gate
+ * opens after 100. Parameter thresholds (+ / -): DC motor R_A +8 % / -20 % (the
  * cold winding is -11 %), Psi 2.5 % / 2.5 % (sigma 0.01 %; a 2 V U_A
  * offset moves it 6.9 %), J 5 % / 5 %, M_c 3 % / 10 % (+50 % friction is
  * +4.2 % of the lumped M_c at the 1.2 N m load); J/Psi 2 % (a +5 % speed
