@@ -75,16 +75,40 @@ static inline unsigned canfdi_clz64(uint64_t x)
 }
 
 /*
+ * a b, the full 64-bit product of two unsigned 32-bit numbers: one UMULL on
+ * ARMv7-M; on ARMv6-M, which has none, four 16x16->32 MULS and the carries
+ * (libgcc's __aeabi_lmul would multiply 64 by 64 bits).
+ * Scaling and overflow: exact, cannot overflow.
+ */
+static inline uint64_t canfdi_umull32(uint32_t a, uint32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  const uint32_t al = a & 0xFFFFU;
+  const uint32_t ah = a >> 16;
+  const uint32_t bl = b & 0xFFFFU;
+  const uint32_t bh = b >> 16;
+  const uint32_t ll = al * bl;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (ah * bl); /* <= 2^32 - 1 */
+  const uint32_t hi = (ah * bh) + (lh >> 16) + (mid >> 16);
+  return ((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU));
+#else
+  return (uint64_t)a * (uint64_t)b;
+#endif
+}
+
+/*
  * acc + floor((a b + 2^31) / 2^32): adds the product a b, rounded half up to
- * its high word, to acc (the SMMLAR of ARMv7E-M; SMULL + adds elsewhere).
+ * its high word, to acc (the SMMLAR of ARMv7E-M; on ARMv7-M one SMLAL into
+ * the pair (2^31, acc)).
  * Scaling and overflow: a Qa x Qb product lands in Q(a + b - 32); the caller
  * guarantees that the sum fits an int32_t (it does not saturate: the users
  * bound their operands, see model/canfdi_rls.c). Rounding: half up.
  */
 static inline int32_t canfdi_mla_hi_rnd(int32_t acc, int32_t a, int32_t b)
 {
-  const int64_t p = ((int64_t)a * (int64_t)b) + 2147483648LL;
-  return acc + (int32_t)canfdi_asr64(p, 32U);
+  const int64_t p = (((int64_t)acc * 4294967296LL) + 2147483648LL) + ((int64_t)a * (int64_t)b);
+  return (int32_t)canfdi_asr64(p, 32U);
 }
 
 #endif /* CANFDI_INTRIN_H */

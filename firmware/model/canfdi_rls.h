@@ -135,7 +135,8 @@ typedef struct {
   int32_t e;
 } canfdi_rls_xf_t;
 
-/* A positive number m 2^e with 2^31 <= m < 2^32, or m == 0 (internal). */
+/* A positive number (m / 2^32) 2^e with 2^31 <= m < 2^32, i.e. in
+ * [2^(e-1), 2^e), or m == 0 (internal). */
 typedef struct {
   uint32_t m;
   int32_t e;
@@ -176,13 +177,14 @@ typedef struct {
   int32_t u[CANFDI_RLS_N_U]; /* strict upper triangle, column-wise: u_ij (i < j)
                               * = u[j (j - 1) / 2 + i] 2^u_e[j] */
   int16_t u_e[CANFDI_CFG_RLS_MAX_PARAMS];
-  canfdi_rls_pf_t d[CANFDI_CFG_RLS_MAX_PARAMS]; /* P = U D U^T / a0 */
-  canfdi_rls_pf_t a0;
-  canfdi_rls_pf_t lambda;        /* from cfg */
+  canfdi_rls_pf_t d[CANFDI_CFG_RLS_MAX_PARAMS]; /* P = U D U^T c0 */
+  canfdi_rls_pf_t c0;            /* the common scale of D (1 / a0) */
+  canfdi_rls_pf_t inv_lambda;    /* 1 / lambda, from cfg */
+  canfdi_rls_pf_t trb_grow;      /* (1 / lambda) (1 + 2^-20): trb's growth per update */
   canfdi_rls_pf_t trace_max;
-  canfdi_rls_pf_t inv_trace_max;
-  int64_t mean[CANFDI_CFG_RLS_MAX_PARAMS];   /* running means of phi, Q32.32 physical */
-  int64_t excite[CANFDI_CFG_RLS_MAX_PARAMS]; /* filtered squared normalised deviation, Q48 */
+  canfdi_rls_pf_t trb;           /* upper bound of trace(P) */
+  int64_t excite[CANFDI_CFG_RLS_MAX_PARAMS]; /* filtered squared normalised deviation, Q46 */
+  int32_t mean[CANFDI_CFG_RLS_MAX_PARAMS];   /* running means of the normalised phi, Q23 */
   canfdi_rls_pf_t err;        /* last a-priori error |e| (normalised) and its sign */
   bool err_neg;
   bool primed;                /* means initialised from a first sample */
