@@ -31,6 +31,12 @@ typedef canfdi_rls_xf_t xf_t;
  * +-128, and its deviation from the mean to +-2^30. */
 #define GATE_Z_MAX (((int32_t)1 << 30) - 1)
 #define GATE_DEV_MAX ((int32_t)1 << 30)
+/* The regressor block's fixed format: phi_q16 2^(10 - s) (Q26 normalised,
+ * exact for s <= 10), used whenever every |phi_norm| < 16; and the shifts
+ * for which it is defined (a left shift of 0..30 bits). */
+#define X_FIX_E (-26)
+#define X_SHIFT_MIN (-20)
+#define X_SHIFT_MAX 10
 
 CANFDI_STATIC_ASSERT(CANFDI_CFG_RLS_MAX_PARAMS >= 1U, rls_max_params_positive);
 CANFDI_STATIC_ASSERT(CANFDI_CFG_RLS_MAX_PARAMS <= 7U, rls_max_params_fit_int64_sums);
@@ -288,11 +294,17 @@ static inline int64_t asr64_rnd_k(int64_t x, unsigned k)
   return canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)h << 32) | lo);
 }
 
+/* floor(x 2^-k) for k in 0..31: one ASR (canfdi_asr32 without its clamp). */
+static inline __attribute__((always_inline)) int32_t asr_k(int32_t x, unsigned k)
+{
+  return (x >= 0) ? (x >> k) : (-1 - ((-1 - x) >> k));
+}
+
 /* round(x 2^-k), half up, for k in 1..31 (canfdi_asr32_rnd, always
  * inline: an ASR, an LSR, an AND and an ADD). */
 static inline __attribute__((always_inline)) int32_t asr_rnd(int32_t x, unsigned k)
 {
-  return canfdi_asr32(x, k) + (int32_t)(((uint32_t)x >> (k - 1U)) & 1U);
+  return asr_k(x, k) + (int32_t)(((uint32_t)x >> (k - 1U)) & 1U);
 }
 
 /* v[0..n-1] *= 2^-k with rounding (k >= 1; k > 31 clears). Scaling: the
@@ -391,6 +403,12 @@ int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg)
       r->inv_lambda = pf_recip(pf_make((uint32_t)((int64_t)2147483648LL - (int64_t)cfg->forget_q31), -31));
       r->trb_grow = pf_mul(r->inv_lambda, pf_make(0x80000800U, -31)); /* (1 + 2^-20) */
       r->trace_max = pf_make((uint32_t)cfg->trace_max_q16, -16);
+      r->fixed_x = true;
+      for (i = 0U; i < cfg->n_params; i++) {
+        if ((cfg->phi_shift[i] < X_SHIFT_MIN) || (cfg->phi_shift[i] > X_SHIFT_MAX)) {
+          r->fixed_x = false;
+        }
+      }
       r->clog2n = 0U;
       while ((1U << r->clog2n) < cfg->n_params) {
         r->clog2n++;
@@ -493,113 +511,149 @@ static inline __attribute__((always_inline)) int64_t asr64_k(int64_t x, unsigned
   return canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)h << 32) | lo);
 }
 
+/* The gate's normalised regressor phi_q16 2^(7 - s) in Q23, clipped to
+ * +-(2^30 - 1) (i.e. +-128): a left shift with saturation or a right shift
+ * rounded half up. */
+static int32_t gate_z(int32_t p, int32_t s)
+{
+  const int32_t l = 7 - s;
+  int32_t z;
+  if (l >= 0) {
+    const int32_t lim = (l > 30) ? 0 : (GATE_Z_MAX >> (unsigned)l);
+    const int32_t pc = (p > lim) ? lim : ((p < -lim) ? -lim : p);
+    z = pc * ((int32_t)1 << (unsigned)((l > 30) ? 0 : l));
+  } else {
+    z = canfdi_asr32_rnd(p, (unsigned)-l); /* |z| <= 2^30 */
+    z = (z > GATE_Z_MAX) ? GATE_Z_MAX : ((z < -GATE_Z_MAX) ? -GATE_Z_MAX : z);
+  }
+  return z;
+}
+
+/*
+ * The regressors as one block x[i] 2^ex (normalised units, |x| <= 2^30) and
+ * x^T theta (one exact 64-bit sum: products below 2^60); returns ex.
+ * Fixed format when the configuration allows it and every |phi_norm| < 16:
+ * x = phi_q16 2^(10 - s) exactly, ex = -26. Otherwise a dynamic block, the
+ * largest in [2^29, 2^30]: phi_i 2^-(16 + s_i) is shifted exactly (left) or
+ * rounded half up (right, when regressors differ by more than 2^30 in
+ * normalised size: the small one keeps fewer bits, see the header).
+ */
+static int32_t rls_block(const canfdi_rls_t *r, const int32_t phi_q16[], int32_t x[], int64_t *xt, bool *xfix)
+{
+  const unsigned n = r->cfg.n_params;
+  int32_t ex = X_FIX_E;
+  int64_t acc = 0;
+  bool fits;
+  uint32_t over = r->fixed_x ? 0U : 1U;
+  unsigned i;
+  if (over == 0U) {
+    for (i = 0U; i < n; i++) {
+      const int32_t p = phi_q16[i];
+      const int32_t sh = (int32_t)r->cfg.phi_shift[i]; /* -20..10 */
+      const int32_t v = canfdi_wrap_u32_to_s32((uint32_t)p << (unsigned)(10 - sh));
+      over |= magbits(p) >> (unsigned)(20 + sh); /* |p| 2^(10 - s) >= 2^30 */
+      x[i] = v;
+      acc += (int64_t)r->theta[i] * (int64_t)v;
+    }
+  }
+  fits = (over == 0U);
+  if (!fits) {
+    int32_t top = INT32_MIN;
+    acc = 0;
+    for (i = 0U; i < n; i++) {
+      const uint32_t m = mag32(phi_q16[i]);
+      if (m != 0U) {
+        const int32_t t = (16 - (int32_t)canfdi_clz32(m)) - (int32_t)r->cfg.phi_shift[i];
+        top = (t > top) ? t : top;
+      }
+    }
+    ex = (top == INT32_MIN) ? 0 : (top - 30);
+    for (i = 0U; i < n; i++) {
+      const int32_t p = phi_q16[i];
+      const int32_t l = (-16 - (int32_t)r->cfg.phi_shift[i]) - ex; /* left shift */
+      int32_t v = 0;
+      if (p == 0) {
+        /* its shift may exceed 31 (only a nonzero regressor bounds it) */
+      } else if (l >= 0) {
+        v = p * ((int32_t)1 << (unsigned)l); /* < 2^30 by choice of ex */
+      } else {
+        v = canfdi_asr32_rnd(p, (unsigned)-l);
+      }
+      x[i] = v;
+      acc += (int64_t)r->theta[i] * (int64_t)v;
+    }
+  }
+  *xt = acc;
+  *xfix = fits;
+  return ex;
+}
+
 /*
  * Excitation measure and gate; updates the running means of the gated
- * regressors (the others are never read). Scaling and overflow: the
- * normalised regressor z = phi_q16 2^(7 - s) in Q23, clipped to
- * +-(2^30 - 1) (+-128 normalised), and its mean (a convex combination of
- * such values, rounded half up: dead zone 2^(k-24) normalised, which adds
- * at most 2^(2k-48) to the measure) give a deviation below 2^31; it is
- * clipped to +-2^30, so its square (Q46) stays below 2^60 and the filtered
- * measure too (floor: at most 2^-46 low).
+ * regressors (the others are never read). The normalised regressor z in
+ * Q23 (gate_z; from the block when it has the fixed format: round(x / 8),
+ * the same value) is clipped to +-(2^30 - 1) (+-128 normalised). Scaling
+ * and overflow: z and its mean (a convex combination of such values,
+ * rounded half up: dead zone 2^(k-24) normalised, which adds at most
+ * 2^(2k-48) to the measure) give a deviation below 2^31; it is clipped to
+ * +-2^30, so its square (Q46) stays below 2^60 and the filtered measure
+ * too (floor: at most 2^-46 low).
  */
-static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[])
+static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[], const int32_t x[], bool xfix)
 {
   const unsigned k = r->cfg.excite_shift;
-  int64_t m = INT64_MAX;
   unsigned mask = rls_gate_mask(r);
+  int64_t m = INT64_MAX;
   unsigned i;
+  if (!r->primed) {
+    for (i = 0U; i < r->cfg.n_params; i++) {
+      r->mean[i] = xfix ? asr_rnd(x[i], 3U) : gate_z(phi_q16[i], r->cfg.phi_shift[i]);
+      r->excite[i] = 0;
+    }
+    r->primed = true;
+  }
   for (i = 0U; mask != 0U; i++) {
     if ((mask & 1U) != 0U) {
-      const int32_t l = 7 - (int32_t)r->cfg.phi_shift[i];
-      const int32_t p = phi_q16[i];
-      int32_t z;
-      int32_t dev;
-      int64_t ex;
-      if (l >= 0) {
-        const int32_t lim = (l > 30) ? 0 : (GATE_Z_MAX >> (unsigned)l);
-        z = (p > lim) ? GATE_Z_MAX : ((p < -lim) ? -GATE_Z_MAX : (p * ((int32_t)1 << (unsigned)(l & 31))));
-      } else {
-        z = canfdi_asr32_rnd(p, (unsigned)-l); /* |z| <= 2^30 */
-        z = (z > GATE_Z_MAX) ? GATE_Z_MAX : ((z < -GATE_Z_MAX) ? -GATE_Z_MAX : z);
-      }
-      if (!r->primed) {
-        r->mean[i] = z;
-        r->excite[i] = 0;
-      }
-      dev = z - r->mean[i];
+      const int32_t z = xfix ? asr_rnd(x[i], 3U) : gate_z(phi_q16[i], r->cfg.phi_shift[i]);
+      int32_t dev = z - r->mean[i];
+      int64_t ex = r->excite[i];
       r->mean[i] += asr_rnd(dev, k);
       dev = (dev > GATE_DEV_MAX) ? GATE_DEV_MAX : ((dev < -GATE_DEV_MAX) ? -GATE_DEV_MAX : dev);
-      ex = r->excite[i];
       ex += asr64_k(((int64_t)dev * (int64_t)dev) - ex, k);
       r->excite[i] = ex;
       m = (ex < m) ? ex : m;
     }
     mask >>= 1;
   }
-  r->primed = true;
   return (r->cfg.excite_min_q16 == 0) || (m >= ((int64_t)r->cfg.excite_min_q16 * 1073741824LL));
 }
 
 /*
- * The regressors as one block x[i] 2^ex (normalised units, |x| <= 2^30,
- * the largest in [2^29, 2^30]), and the prediction error y_norm - x^T theta
- * as a float with sign (r->err, r->err_neg); returns ex. Scaling and
- * overflow: phi_i 2^-(16 + s_i) is shifted exactly (left) or rounded half
- * up (right, when regressors differ by more than 2^30 in normalised size:
- * the small one keeps fewer bits, see the header). x^T theta is one exact
- * 64-bit sum (products below 2^60); it is aligned to y 2^16 (16 guard bits
- * below y's last bit) with rounding half up, the difference below 2^49.
- * When the sum carries bits above that format (theta or x beyond their
- * usual range) the signed xf path takes over (rounded to 30 bits).
+ * The prediction error y_norm - x^T theta as a float with sign (r->err,
+ * r->err_neg), from xt = x^T theta 2^-(theta_e + ex). Scaling and overflow:
+ * xt is aligned to y 2^16 (16 guard bits below y's last bit) with rounding
+ * half up, the difference below 2^49. When the sum carries bits above that
+ * format (theta or x beyond their usual range) the signed xf path takes
+ * over (rounded to 30 bits).
  */
-static int32_t rls_phi_error(canfdi_rls_t *r, const int32_t phi_q16[], int32_t x[], int32_t y_q16)
+static void rls_error(canfdi_rls_t *r, int64_t xt, int32_t ex, int32_t y_q16)
 {
-  const unsigned n = r->cfg.n_params;
   const int32_t ey = -32 - (int32_t)r->cfg.y_shift; /* y 2^16 */
-  int32_t top = INT32_MIN;
-  int32_t ex;
-  int32_t d;
-  int64_t acc = 0;
-  unsigned i;
-  for (i = 0U; i < n; i++) {
-    const uint32_t m = mag32(phi_q16[i]);
-    if (m != 0U) {
-      const int32_t t = (16 - (int32_t)canfdi_clz32(m)) - (int32_t)r->cfg.phi_shift[i];
-      top = (t > top) ? t : top;
-    }
-  }
-  ex = (top == INT32_MIN) ? 0 : (top - 30);
-  for (i = 0U; i < n; i++) {
-    const int32_t p = phi_q16[i];
-    const int32_t l = (-16 - (int32_t)r->cfg.phi_shift[i]) - ex; /* left shift */
-    int32_t v = 0;
-    if (p == 0) {
-      /* its shift may exceed 31 (only a nonzero regressor bounds it) */
-    } else if (l >= 0) {
-      v = p * ((int32_t)1 << (unsigned)l); /* < 2^30 by choice of ex */
-    } else {
-      v = canfdi_asr32_rnd(p, (unsigned)-l);
-    }
-    x[i] = v;
-    acc += (int64_t)r->theta[i] * (int64_t)v;
-  }
-  d = ey - (r->theta_e + ex);
+  const int32_t d = ey - (r->theta_e + ex);
   if (d >= 1) {
-    const int64_t v = ((int64_t)y_q16 * 65536) - ((d <= 31) ? asr64_rnd_k(acc, (unsigned)d) : canfdi_asr64_rnd(acc, (unsigned)d));
+    const int64_t v = ((int64_t)y_q16 * 65536) - ((d <= 31) ? asr64_rnd_k(xt, (unsigned)d) : canfdi_asr64_rnd(xt, (unsigned)d));
     r->err_neg = (v < 0);
     r->err = (v == 0) ? PF_ZERO : pf_from_u64(r->err_neg ? (0U - (uint64_t)v) : (uint64_t)v, ey);
   } else {
-    const xf_t e = xf_add(xf_make(y_q16, -16 - (int32_t)r->cfg.y_shift), xf_make(-acc, r->theta_e + ex));
+    const xf_t e = xf_add(xf_make(y_q16, -16 - (int32_t)r->cfg.y_shift), xf_make(-xt, r->theta_e + ex));
     r->err_neg = (e.m < 0);
     r->err = pf_make(mag32(e.m), e.e);
   }
-  return ex;
 }
 
 /* trunc(m 2^-s) with the sign mask neg (0 or all ones), for a mantissa
  * m < 2^32 and s >= 1 (|result| <= 2^31 - 1); s > 31 gives 0. Truncation
- * toward zero (2^-31 of the multiplier's range at most). */
+ * toward zero (one unit of the multiplier at most). */
 static inline __attribute__((always_inline)) int32_t fix_mul(uint32_t m, int32_t s, uint32_t neg)
 {
   const uint32_t v = (s <= 31) ? (m >> (unsigned)s) : 0U;
@@ -763,18 +817,142 @@ static inline __attribute__((always_inline)) pf_t recip_m(uint32_t vm, int32_t v
  * the maximum column by column (b[0..j-1] shifted down, rounded, when a
  * column raises it).
  */
-static void rls_apply(canfdi_rls_t *r, const int32_t x[], int32_t ex)
+/* Column j's g = d_j f_j (normalised) and h = f_j / alpha_j (the high word
+ * of the mantissa product, >= 2^30), for the multipliers. */
+typedef struct {
+  uint32_t gm;
+  int32_t ge;
+  uint32_t hm;
+  int32_t he;
+} rls_gh_t;
+
+/*
+ * The scalar part of column j for f_j = fm 2^(fe - 32) (normalised, not 0):
+ * g and h into *o, then w = g h, rho = 1 / (1 + w) = alpha_j / alpha_(j+1),
+ * d_j *= rho (floored at 2^d_floor_e) and inv *= rho (inv = im 2^(ie - 32)
+ * = 1 / alpha_j). For w < 1 (the common case: v = 1 + w in [1, 2) needs no
+ * alignment) rho is a Q32 fraction from one division and one Newton step
+ * (2^-29 at worst, below 2^-31 on average); else v and rho are pf.
+ */
+static inline __attribute__((always_inline)) void rls_step(canfdi_rls_t *r, unsigned j, uint32_t fm, int32_t fe,
+                                                          uint32_t *im, int32_t *ie, int32_t d_floor_e, rls_gh_t *o)
+{
+  const pf_t dj = r->d[j];
+  pf_t dn;
+  uint32_t wh;
+  int32_t k;
+  {
+    const uint64_t pg = canfdi_umull32(dj.m, fm);
+    const uint32_t gh = (uint32_t)(pg >> 32);
+    const uint32_t sg = lz01(gh);
+    o->gm = (gh << sg) | (((uint32_t)pg >> 31) & sg);
+    o->ge = (dj.e + fe) - (int32_t)sg;
+  }
+  o->hm = umulhi(fm, *im);
+  o->he = fe + *ie;
+  wh = umulhi(o->gm, o->hm); /* w = wh 2^(ge + he - 32), wh >= 2^29 */
+  k = 1 - (o->ge + o->he);
+  if (k >= 1) {
+    const uint32_t v = 0x80000000U + ((k < 32) ? (wh >> (unsigned)k) : 0U);
+    uint32_t q = (0xFFFFFFFFU / ((v >> 16) + 1U)) << 15;
+    const uint64_t t = ((uint64_t)1 << 63) - canfdi_umull32(v, q);
+    q += umulhi(q, (uint32_t)(t >> 31));
+    q = (q < 0x80000000U) ? 0x80000000U : q;
+    {
+      const uint64_t pd = canfdi_umull32(dj.m, q);
+      const uint32_t dh = (uint32_t)(pd >> 32);
+      const uint32_t sd = lz01(dh);
+      dn.m = (dh << sd) | (((uint32_t)pd >> 31) & sd);
+      dn.e = dj.e - (int32_t)sd;
+    }
+    {
+      const uint64_t pi = canfdi_umull32(*im, q);
+      const uint32_t ih = (uint32_t)(pi >> 32);
+      const uint32_t si = lz01(ih);
+      *im = (ih << si) | (((uint32_t)pi >> 31) & si);
+      *ie -= (int32_t)si;
+    }
+  } else {
+    const unsigned sw = canfdi_clz32(wh);
+    const pf_t one = {0x80000000U, 1};
+    const pf_t wf = {wh << sw, (o->ge + o->he) - (int32_t)sw};
+    const pf_t v = pf_add(one, wf);
+    const pf_t rho = recip_m(v.m, v.e);
+    const pf_t inv = {*im, *ie};
+    const pf_t ni = pf_mul(inv, rho);
+    dn = pf_mul(dj, rho);
+    *im = ni.m;
+    *ie = ni.e;
+  }
+  if (dn.e < d_floor_e) {
+    dn.m = 0x80000000U;
+    dn.e = d_floor_e;
+    canfdi_count_inc(&r->diag.saturations);
+  }
+  r->d[j] = dn;
+}
+
+/* f from a 64-bit sum: |acc| < 7 2^60, not 0; fm normalised, *fe its
+ * exponent for acc 2^e; returns the sign as a mask. */
+static inline __attribute__((always_inline)) uint32_t rls_f(int64_t acc, int32_t e, uint32_t *fm, int32_t *fe)
+{
+  const uint32_t neg = (acc < 0) ? 0xFFFFFFFFU : 0U;
+  const uint64_t mag = (neg != 0U) ? (0U - (uint64_t)acc) : (uint64_t)acc;
+  const uint32_t mh = (uint32_t)(mag >> 32);
+  if (mh != 0U) {
+    const unsigned sf = canfdi_clz32(mh); /* >= 1 */
+    *fm = (mh << sf) | ((uint32_t)mag >> (32U - sf));
+    *fe = (e + 64) - (int32_t)sf;
+  } else {
+    const unsigned sf = canfdi_clz32((uint32_t)mag);
+    *fm = (uint32_t)mag << sf;
+    *fe = (e + 32) - (int32_t)sf;
+  }
+  return neg;
+}
+
+/*
+ * One applied update on the regressor block x 2^ex (the error is in r), in
+ * one pass over the columns (Bierman's measurement update in ratio form).
+ * With alpha_0 = lambda a0 and alpha_(j+1) = alpha_j + d_j f_j^2, the pass
+ * carries inv = 1 / alpha_j: per column j, f_j = x_j + sum_(i<j) u_ij x_i
+ * (one 64-bit sum: the products are below 2^60, x_j 2^-u_e below 2^60),
+ * g_j = d_j f_j (f's sign), h = f_j inv, w = g_j h = d_j f_j^2 / alpha_j,
+ * rho = 1 / (1 + w) = alpha_j / alpha_(j+1); then d_j *= rho, inv *= rho
+ * (rls_step), the column update (rls_column) and b_j = g_j, so that b ends
+ * as U g (in the block b[] 2^eb) and the gain is b / alpha_n = b inv. The
+ * scale c0 = 1 / a0 becomes 1 / alpha_0 (forgetting). Column 0 has no U
+ * entries: f_0 = x_0.
+ * Gain block: b_i = sum_(k >= i) u_ik g_k < n 2^(30 + max(u_e + g.e)),
+ * so eb = max(u_e + g.e) + ceil(log2 n) keeps it below 2^30; eb follows
+ * the maximum column by column (b[0..j-1] shifted down, rounded, when a
+ * column raises it). Column 0 counts with u_e = -30.
+ */
+static __attribute__((noinline)) void rls_apply(canfdi_rls_t *r, const int32_t x[], int32_t ex)
 {
   const unsigned n = r->cfg.n_params;
   const int32_t hd = (int32_t)r->clog2n;
   int32_t b[NMAX];
   int32_t eb = INT32_MIN;
-  pf_t inv = pf_mul(r->c0, r->inv_lambda); /* 1 / alpha_0, the new c0 */
+  const pf_t c0 = pf_mul(r->c0, r->inv_lambda); /* 1 / alpha_0, the new c0 */
+  const int32_t d_floor_e = -D_FLOOR_REL - c0.e;
+  uint32_t im = c0.m; /* inv = 1 / alpha_j */
+  int32_t ie = c0.e;
   int32_t *col = r->u;
   unsigned i;
   unsigned j;
-  r->c0 = inv;
-  for (j = 0U; j < n; j++) {
+  r->c0 = c0;
+  b[0] = 0;
+  if (x[0] != 0) {
+    rls_gh_t o;
+    uint32_t fm;
+    int32_t fe;
+    const uint32_t neg = rls_f(x[0], ex, &fm, &fe);
+    rls_step(r, 0U, fm, fe, &im, &ie, d_floor_e, &o);
+    eb = (o.ge + U_EMIN) + hd;
+    b[0] = fix_mul(o.gm, (32 + eb) - o.ge, neg);
+  }
+  for (j = 1U; j < n; j++) {
     const int32_t ue = (int32_t)r->u_e[j];
     int64_t acc;
     if (ue <= 0) {
@@ -787,46 +965,13 @@ static void rls_apply(canfdi_rls_t *r, const int32_t x[], int32_t ex)
     }
     b[j] = 0;
     if (acc != 0) {
-      const uint32_t neg = (acc < 0) ? 0xFFFFFFFFU : 0U;
-      const pf_t f = pf_from_u64((neg != 0U) ? (0U - (uint64_t)acc) : (uint64_t)acc, ue + ex);
-      const pf_t dj = r->d[j];
-      const uint32_t gm = umulhi(dj.m, f.m); /* g = gm 2^(ge - 32) */
-      const int32_t ge = dj.e + f.e;
-      const uint32_t hm = umulhi(f.m, inv.m); /* h = f / alpha_j */
-      const int32_t he = f.e + inv.e;
+      rls_gh_t o;
+      uint32_t fm;
+      int32_t fe;
+      const uint32_t neg = rls_f(acc, ue + ex, &fm, &fe);
       int32_t c;
-      {
-        /* w = g h, normalised; v = 1 + w; rho = 1 / v; d_j and inv *= rho */
-        const uint64_t p = canfdi_umull32(gm, hm);
-        const uint32_t wh = (uint32_t)(p >> 32); /* >= 2^28 */
-        const unsigned s = canfdi_clz32(wh);
-        const uint32_t wm = (wh << s) | (((uint32_t)p >> 1) >> (31U - s));
-        const int32_t we = (ge + he) - (int32_t)s;
-        uint32_t vm;
-        int32_t ve = 1;
-        pf_t rho;
-        pf_t dn;
-        if (we <= 0) {
-          const uint32_t sh = (uint32_t)(1 - we);
-          vm = 0x80000000U + ((sh < 32U) ? (wm >> sh) : 0U);
-        } else {
-          const pf_t one = {0x80000000U, 1};
-          const pf_t wf = {wm, we};
-          const pf_t v = pf_add(one, wf);
-          vm = v.m;
-          ve = v.e;
-        }
-        rho = recip_m(vm, ve);
-        dn = pf_mul(dj, rho);
-        if ((dn.e + r->c0.e) < -D_FLOOR_REL) {
-          dn.m = 0x80000000U;
-          dn.e = -D_FLOOR_REL - r->c0.e;
-          canfdi_count_inc(&r->diag.saturations);
-        }
-        r->d[j] = dn;
-        inv = pf_mul(inv, rho);
-      }
-      c = (ue + ge) + hd;
+      rls_step(r, j, fm, fe, &im, &ie, d_floor_e, &o);
+      c = (ue + o.ge) + hd;
       if (eb == INT32_MIN) {
         eb = c;
       } else if (c > eb) {
@@ -835,15 +980,13 @@ static void rls_apply(canfdi_rls_t *r, const int32_t x[], int32_t ex)
       } else {
         /* the block holds it */
       }
-      if (j > 0U) {
-        rls_column(col, j, &r->u_e[j], hm, he, gm, ge, neg, b, eb);
-      }
-      b[j] = fix_mul(gm, (32 + eb) - ge, neg);
+      rls_column(col, j, &r->u_e[j], o.hm, o.he, o.gm, o.ge, neg, b, eb);
+      b[j] = fix_mul(o.gm, (32 + eb) - o.ge, neg);
     }
     col = &col[j];
   }
   if ((r->err.m != 0U) && (eb != INT32_MIN)) {
-    rls_theta_update(r, b, eb, umulhi(r->err.m, inv.m), r->err.e + inv.e, r->err_neg ? 0xFFFFFFFFU : 0U);
+    rls_theta_update(r, b, eb, umulhi(r->err.m, im), r->err.e + ie, r->err_neg ? 0xFFFFFFFFU : 0U);
   }
   rls_bound(r);
 }
@@ -851,11 +994,14 @@ static void rls_apply(canfdi_rls_t *r, const int32_t x[], int32_t ex)
 bool canfdi_rls_update(canfdi_rls_t *r, const int32_t phi_q16[], int32_t y_q16)
 {
   int32_t x[NMAX];
+  int64_t xt;
   int32_t ex;
+  bool xfix;
   bool go;
   CANFDI_ASSERT((r != NULL) && (phi_q16 != NULL));
-  go = rls_gate(r, phi_q16);
-  ex = rls_phi_error(r, phi_q16, x, y_q16);
+  ex = rls_block(r, phi_q16, x, &xt, &xfix);
+  go = rls_gate(r, phi_q16, x, xfix);
+  rls_error(r, xt, ex, y_q16);
   r->excited = go;
   if (go) {
     rls_apply(r, x, ex);

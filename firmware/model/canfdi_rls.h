@@ -190,6 +190,8 @@ typedef struct {
   bool primed;                /* means initialised from a first sample */
   bool excited;               /* last gate decision */
   uint8_t clog2n;             /* ceil(log2 n) */
+  bool fixed_x;               /* every shift in X_SHIFT_MIN..X_SHIFT_MAX: the
+                               * regressor block may take the fixed format */
   canfdi_rls_diag_t diag;
 } canfdi_rls_t;
 
