@@ -279,21 +279,6 @@ static inline __attribute__((always_inline)) uint32_t magbits(int32_t x)
   return (uint32_t)x ^ (uint32_t)canfdi_asr32(x, 31U);
 }
 
-/*
- * floor((x + 2^(k-1)) / 2^k) for k in 1..31 on the two 32-bit halves (a
- * run-time 64-bit shift is ~25 instructions on ARMv7-M and a libgcc call on
- * ARMv6-M; this is ~8). Scaling and overflow: |x| < 2^62, so the rounding
- * add cannot overflow. Rounding: half up.
- */
-static inline int64_t asr64_rnd_k(int64_t x, unsigned k)
-{
-  const uint64_t u = (uint64_t)x + ((uint64_t)1 << (k - 1U));
-  const uint32_t hi = (uint32_t)(u >> 32);
-  const uint32_t lo = ((uint32_t)u >> k) | (hi << (32U - k));
-  const int32_t h = canfdi_asr32(canfdi_wrap_u32_to_s32(hi), k);
-  return canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)h << 32) | lo);
-}
-
 /* floor(x 2^-k) for k in 0..31: one ASR (canfdi_asr32 without its clamp). */
 static inline __attribute__((always_inline)) int32_t asr_k(int32_t x, unsigned k)
 {
@@ -507,7 +492,7 @@ static inline __attribute__((always_inline)) int64_t asr64_k(int64_t x, unsigned
   const uint64_t u = (uint64_t)x;
   const uint32_t hi = (uint32_t)(u >> 32);
   const uint32_t lo = ((uint32_t)u >> k) | (hi << (32U - k));
-  const int32_t h = canfdi_asr32(canfdi_wrap_u32_to_s32(hi), k);
+  const int32_t h = asr_k(canfdi_wrap_u32_to_s32(hi), k);
   return canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)h << 32) | lo);
 }
 
@@ -631,8 +616,8 @@ static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[], const int32_t x[]
 /*
  * The prediction error y_norm - x^T theta as a float with sign (r->err,
  * r->err_neg), from xt = x^T theta 2^-(theta_e + ex). Scaling and overflow:
- * xt is aligned to y 2^16 (16 guard bits below y's last bit) with rounding
- * half up, the difference below 2^49. When the sum carries bits above that
+ * xt is aligned to y 2^16 (16 guard bits below y's last bit, floor), the
+ * difference below 2^49. When the sum carries bits above that
  * format (theta or x beyond their usual range) the signed xf path takes
  * over (rounded to 30 bits).
  */
@@ -641,7 +626,7 @@ static void rls_error(canfdi_rls_t *r, int64_t xt, int32_t ex, int32_t y_q16)
   const int32_t ey = -32 - (int32_t)r->cfg.y_shift; /* y 2^16 */
   const int32_t d = ey - (r->theta_e + ex);
   if (d >= 1) {
-    const int64_t v = ((int64_t)y_q16 * 65536) - ((d <= 31) ? asr64_rnd_k(xt, (unsigned)d) : canfdi_asr64_rnd(xt, (unsigned)d));
+    const int64_t v = ((int64_t)y_q16 * 65536) - ((d <= 31) ? asr64_k(xt, (unsigned)d) : canfdi_asr64(xt, (unsigned)d));
     r->err_neg = (v < 0);
     r->err = (v == 0) ? PF_ZERO : pf_from_u64(r->err_neg ? (0U - (uint64_t)v) : (uint64_t)v, ey);
   } else {
