@@ -152,30 +152,20 @@ static bool pf_lt(pf_t a, pf_t b)
 }
 
 /*
- * 1 / a for a > 0: q / 2^32 2^(1-e) with q ~ 2^63 / m. Scaling and
- * overflow: a 16-bit quotient (one 32-bit division) seeds two Newton-Raphson
- * steps q (2 - m q / 2^63), each with one 32x32->64 product for m q and one
- * for the correction; from below, so q < 2^32 whatever m. Relative error
- * below 2^-31. Cost: one UDIV (__aeabi_uidiv on ARMv6-M), four UMULL, a
- * few ALU instructions.
+ * 1 / a for a > 0: q 2^(1 - e - 32) with q ~ 2^63 / m (canfdi_recip_q63:
+ * from below, within 2^-30.4), normalised. Cost: two table loads, three
+ * 32x32->64 multiplies.
  */
 static pf_t pf_recip(pf_t a)
 {
-  pf_t r = PF_ZERO;
+  const uint32_t q = canfdi_recip_q63(a.m);
+  pf_t r;
   CANFDI_ASSERT(a.m >= 0x80000000U);
-  if (a.m != 0U) {
-    const uint64_t one = (uint64_t)1 << 63;
-    uint32_t q = (0xFFFFFFFFU / ((a.m >> 16) + 1U)) << 15; /* 2^63 / m (1 - 2^-14 .. 1) */
-    uint64_t t = one - canfdi_umull32(a.m, q);               /* < 2^50 */
-    q += (uint32_t)(canfdi_umull32(q, (uint32_t)(t >> 31)) >> 32);
-    t = one - canfdi_umull32(a.m, q); /* < 2^36: q now within 2^-28 */
-    q += (uint32_t)(canfdi_umull32(q, (uint32_t)(t >> 4)) >> 59);
-    r.m = q;
-    r.e = 1 - a.e;
-    if (q < 0x80000000U) {
-      r.m = q << 1;
-      r.e -= 1;
-    }
+  r.m = q;
+  r.e = 1 - a.e;
+  if (q < 0x80000000U) {
+    r.m = q << 1;
+    r.e -= 1;
   }
   return r;
 }
@@ -538,7 +528,7 @@ static int32_t rls_block(const canfdi_rls_t *r, const int32_t phi_q16[], int32_t
       const int32_t v = canfdi_wrap_u32_to_s32((uint32_t)p << (unsigned)(10 - sh));
       over |= magbits(p) >> (unsigned)(20 + sh); /* |p| 2^(10 - s) >= 2^30 */
       x[i] = v;
-      acc += (int64_t)r->theta[i] * (int64_t)v;
+      acc += canfdi_smull32(r->theta[i], v);
     }
   }
   fits = (over == 0U);
@@ -565,7 +555,7 @@ static int32_t rls_block(const canfdi_rls_t *r, const int32_t phi_q16[], int32_t
         v = canfdi_asr32_rnd(p, (unsigned)-l);
       }
       x[i] = v;
-      acc += (int64_t)r->theta[i] * (int64_t)v;
+      acc += canfdi_smull32(r->theta[i], v);
     }
   }
   *xt = acc;
@@ -604,7 +594,7 @@ static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[], const int32_t x[]
       int64_t ex = r->excite[i];
       r->mean[i] += asr_rnd(dev, k);
       dev = (dev > GATE_DEV_MAX) ? GATE_DEV_MAX : ((dev < -GATE_DEV_MAX) ? -GATE_DEV_MAX : dev);
-      ex += asr64_k(((int64_t)dev * (int64_t)dev) - ex, k);
+      ex += asr64_k(canfdi_smull32(dev, dev) - ex, k);
       r->excite[i] = ex;
       m = (ex < m) ? ex : m;
     }
@@ -760,28 +750,9 @@ static void rls_bound(canfdi_rls_t *r)
 /* The high word of the 64-bit product of two unsigned 32-bit numbers. */
 static inline __attribute__((always_inline)) uint32_t umulhi(uint32_t a, uint32_t b)
 {
-  return (uint32_t)(canfdi_umull32(a, b) >> 32);
+  return canfdi_umulhi32(a, b);
 }
 
-/*
- * 1 / v for v = vm 2^(ve - 32), vm in [2^31, 2^32): q 2^(1 - ve - 32) with
- * q ~ 2^63 / vm, normalised (pf_recip's method, inline).
- */
-static inline __attribute__((always_inline)) pf_t recip_m(uint32_t vm, int32_t ve)
-{
-  const uint64_t one = (uint64_t)1 << 63;
-  uint32_t q = (0xFFFFFFFFU / ((vm >> 16) + 1U)) << 15;
-  uint64_t t = one - canfdi_umull32(vm, q);
-  pf_t r;
-  q += umulhi(q, (uint32_t)(t >> 31));
-  r.m = q;
-  r.e = 1 - ve;
-  if (q < 0x80000000U) {
-    r.m = q << 1;
-    r.e -= 1;
-  }
-  return r;
-}
 
 /*
  * One applied update on the regressor block x 2^ex (the error is in r), in
@@ -839,9 +810,7 @@ static inline __attribute__((always_inline)) void rls_step(canfdi_rls_t *r, unsi
   k = 1 - (o->ge + o->he);
   if (k >= 1) {
     const uint32_t v = 0x80000000U + ((k < 32) ? (wh >> (unsigned)k) : 0U);
-    uint32_t q = (0xFFFFFFFFU / ((v >> 16) + 1U)) << 15;
-    const uint64_t t = ((uint64_t)1 << 63) - canfdi_umull32(v, q);
-    q += umulhi(q, (uint32_t)(t >> 31));
+    uint32_t q = canfdi_recip_q63(v);
     q = (q < 0x80000000U) ? 0x80000000U : q;
     {
       const uint64_t pd = canfdi_umull32(dj.m, q);
@@ -862,7 +831,7 @@ static inline __attribute__((always_inline)) void rls_step(canfdi_rls_t *r, unsi
     const pf_t one = {0x80000000U, 1};
     const pf_t wf = {wh << sw, (o->ge + o->he) - (int32_t)sw};
     const pf_t v = pf_add(one, wf);
-    const pf_t rho = recip_m(v.m, v.e);
+    const pf_t rho = pf_recip(v);
     const pf_t inv = {*im, *ie};
     const pf_t ni = pf_mul(inv, rho);
     dn = pf_mul(dj, rho);
@@ -941,12 +910,12 @@ static __attribute__((noinline)) void rls_apply(canfdi_rls_t *r, const int32_t x
     const int32_t ue = (int32_t)r->u_e[j];
     int64_t acc;
     if (ue <= 0) {
-      acc = (int64_t)x[j] * (int64_t)((int32_t)1 << (unsigned)-ue); /* ue >= -30 */
+      acc = canfdi_smull32(x[j], (int32_t)1 << (unsigned)-ue); /* ue >= -30 */
     } else {
       acc = canfdi_asr64_rnd(x[j], (unsigned)ue);
     }
     for (i = 0U; i < j; i++) {
-      acc += (int64_t)col[i] * (int64_t)x[i];
+      acc += canfdi_smull32(col[i], x[i]);
     }
     b[j] = 0;
     if (acc != 0) {
