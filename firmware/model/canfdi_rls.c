@@ -21,7 +21,7 @@ typedef canfdi_rls_xf_t xf_t;
 /* Finest exponent of a U column: entries carry 2^-30 absolute resolution at
  * least (the unit diagonal dominates f and P below that). */
 #define U_EMIN (-30)
-/* Smallest D element: d_j c0 >= about 2^-60 (see the header). */
+/* Smallest D element: d_j c0 >= about 2^-61 (see the header). */
 #define D_FLOOR_REL 60
 /* Exponent window of c0 (the D elements move against it, exactly). */
 #define C0_EMIN (-100)
@@ -462,12 +462,13 @@ static int64_t rls_excitation_q46(const canfdi_rls_t *r)
 {
   int64_t m = INT64_MAX;
   unsigned mask = rls_gate_mask(r);
-  unsigned i;
-  for (i = 0U; mask != 0U; i++) {
+  unsigned i = 0U;
+  while (mask != 0U) {
     if (((mask & 1U) != 0U) && (r->excite[i] < m)) {
       m = r->excite[i];
     }
     mask >>= 1;
+    i++;
   }
   return m;
 }
@@ -587,7 +588,8 @@ static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[], const int32_t x[]
     }
     r->primed = true;
   }
-  for (i = 0U; mask != 0U; i++) {
+  i = 0U;
+  while (mask != 0U) {
     if ((mask & 1U) != 0U) {
       const int32_t z = xfix ? asr_rnd(x[i], 3U) : gate_z(phi_q16[i], r->cfg.phi_shift[i]);
       int32_t dev = z - r->mean[i];
@@ -599,6 +601,7 @@ static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[], const int32_t x[]
       m = (ex < m) ? ex : m;
     }
     mask >>= 1;
+    i++;
   }
   return (r->cfg.excite_min_q16 == 0) || (m >= ((int64_t)r->cfg.excite_min_q16 * 1073741824LL));
 }
@@ -753,26 +756,6 @@ static inline __attribute__((always_inline)) uint32_t umulhi(uint32_t a, uint32_
   return canfdi_umulhi32(a, b);
 }
 
-
-/*
- * One applied update on the regressor block x 2^ex (the error is in r), in
- * one pass over the columns (Bierman's measurement update in ratio form).
- * With alpha_0 = lambda a0 and alpha_(j+1) = alpha_j + d_j f_j^2, the pass
- * carries inv = 1 / alpha_j: per column j, f_j = x_j + sum_(i<j) u_ij x_i
- * (one 64-bit sum: the products are below 2^60, x_j 2^-u_e below 2^60),
- * g_j = d_j f_j (f's sign), h = f_j inv, w = g_j h = d_j f_j^2 / alpha_j,
- * rho = 1 / (1 + w) = alpha_j / alpha_(j+1); then d_j *= rho, inv *= rho,
- * the column update (rls_column) and b_j = g_j, so that b ends as U g (in
- * the block b[] 2^eb) and the gain is b / alpha_n = b inv. The scale c0 =
- * 1 / a0 becomes 1 / alpha_0 (forgetting).
- * Number formats: f, d, inv, rho are normalised pf; g and h are the high
- * words of their mantissa products (in [2^30, 2^32), 30 bits at least) with
- * the summed exponents; w is normalised from their product.
- * Gain block: b_i = sum_(k >= i) u_ik g_k < n 2^(30 + max(u_e + g.e)),
- * so eb = max(u_e + g.e) + ceil(log2 n) keeps it below 2^30; eb follows
- * the maximum column by column (b[0..j-1] shifted down, rounded, when a
- * column raises it).
- */
 /* Column j's g = d_j f_j (normalised) and h = f_j / alpha_j (the high word
  * of the mantissa product, >= 2^30), for the multipliers. */
 typedef struct {
@@ -868,14 +851,14 @@ static inline __attribute__((always_inline)) uint32_t rls_f(int64_t acc, int32_t
 /*
  * One applied update on the regressor block x 2^ex (the error is in r), in
  * one pass over the columns (Bierman's measurement update in ratio form).
- * With alpha_0 = lambda a0 and alpha_(j+1) = alpha_j + d_j f_j^2, the pass
+ * With alpha_0 = lambda / c0 and alpha_(j+1) = alpha_j + d_j f_j^2, the pass
  * carries inv = 1 / alpha_j: per column j, f_j = x_j + sum_(i<j) u_ij x_i
  * (one 64-bit sum: the products are below 2^60, x_j 2^-u_e below 2^60),
  * g_j = d_j f_j (f's sign), h = f_j inv, w = g_j h = d_j f_j^2 / alpha_j,
  * rho = 1 / (1 + w) = alpha_j / alpha_(j+1); then d_j *= rho, inv *= rho
  * (rls_step), the column update (rls_column) and b_j = g_j, so that b ends
  * as U g (in the block b[] 2^eb) and the gain is b / alpha_n = b inv. The
- * scale c0 = 1 / a0 becomes 1 / alpha_0 (forgetting). Column 0 has no U
+ * scale c0 becomes c0 / lambda = 1 / alpha_0 (forgetting). Column 0 has no U
  * entries: f_0 = x_0.
  * Gain block: b_i = sum_(k >= i) u_ik g_k < n 2^(30 + max(u_e + g.e)),
  * so eb = max(u_e + g.e) + ceil(log2 n) keeps it below 2^30; eb follows
@@ -953,6 +936,7 @@ bool canfdi_rls_update(canfdi_rls_t *r, const int32_t phi_q16[], int32_t y_q16)
   bool xfix;
   bool go;
   CANFDI_ASSERT((r != NULL) && (phi_q16 != NULL));
+  CANFDI_ASSERT((r->cfg.n_params >= 1U) && (r->cfg.n_params <= NMAX) && ((rls_gate_mask(r) >> r->cfg.n_params) == 0U));
   ex = rls_block(r, phi_q16, x, &xt, &xfix);
   go = rls_gate(r, phi_q16, x, xfix);
   rls_error(r, xt, ex, y_q16);
