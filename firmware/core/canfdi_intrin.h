@@ -160,7 +160,7 @@ static inline uint32_t canfdi_recip_q63(uint32_t v)
 {
   const uint32_t i = (v >> 23) & 0xFFU;
   const uint32_t a = canfdi_recip_seed[i];
-  const uint32_t q0 = a - canfdi_umulhi32(a - canfdi_recip_seed[i + 1U], (v >> 7) << 16);
+  const uint32_t q0 = a - canfdi_umulhi32(a - canfdi_recip_seed[i + 1U], ((v >> 7) & 0xFFFFU) << 16);
   const uint64_t t = ((uint64_t)1 << 63) - canfdi_umull32(v, q0);
   return q0 + canfdi_umulhi32(q0, (uint32_t)(t >> 31));
 }

@@ -127,13 +127,13 @@ static inline __attribute__((always_inline)) pf_t pf_add(pf_t a, pf_t b)
   const int32_t he = swap ? b.e : a.e;
   const uint32_t d = (uint32_t)(he - (swap ? a.e : b.e));
   const uint32_t l = (d < 32U) ? (lm >> d) : 0U;
-  const uint32_t s = hm + l;
+  const uint64_t s = (uint64_t)hm + l;
   pf_t r;
-  if (s < l) {
-    r.m = (s >> 1) | 0x80000000U;
+  if (s > 0xFFFFFFFFU) {
+    r.m = (uint32_t)(s >> 1);
     r.e = he + 1;
   } else {
-    r.m = s;
+    r.m = (uint32_t)s;
     r.e = he;
   }
   return r;
@@ -182,8 +182,9 @@ static xf_t xf_make(int64_t v, int32_t e)
   if (v != 0) {
     const bool neg = (v < 0);
     const uint64_t mag = neg ? ((uint64_t)(-(v + 1)) + 1U) : (uint64_t)v;
-    const uint64_t t = mag << (canfdi_clz64(mag) - 1U); /* top bit at 62 */
-    const int32_t et = (e - (int32_t)canfdi_clz64(mag)) + 1;
+    const unsigned z = canfdi_clz64(mag); /* 0 only for 2^63 (INT64_MIN) */
+    const uint64_t t = (z == 0U) ? (mag >> 1) : (mag << (z - 1U)); /* top bit at 62 */
+    const int32_t et = (e - (int32_t)z) + 1;
     uint32_t m = (uint32_t)(t >> 33) + (uint32_t)((t >> 32) & 1U);
     r.e = et + 33;
     if (m == 0x40000000U) {
@@ -526,8 +527,9 @@ static int32_t rls_block(const canfdi_rls_t *r, const int32_t phi_q16[], int32_t
     for (i = 0U; i < n; i++) {
       const int32_t p = phi_q16[i];
       const int32_t sh = (int32_t)r->cfg.phi_shift[i]; /* -20..10 */
-      const int32_t v = canfdi_wrap_u32_to_s32((uint32_t)p << (unsigned)(10 - sh));
-      over |= magbits(p) >> (unsigned)(20 + sh); /* |p| 2^(10 - s) >= 2^30 */
+      const uint32_t o = magbits(p) >> (unsigned)(20 + sh); /* |p| 2^(10 - s) > 2^30 */
+      const int32_t v = (o == 0U) ? (p * ((int32_t)1 << (unsigned)(10 - sh))) : 0;
+      over |= o;
       x[i] = v;
       acc += canfdi_smull32(r->theta[i], v);
     }
@@ -621,7 +623,7 @@ static void rls_error(canfdi_rls_t *r, int64_t xt, int32_t ex, int32_t y_q16)
   if (d >= 1) {
     const int64_t v = ((int64_t)y_q16 * 65536) - ((d <= 31) ? asr64_k(xt, (unsigned)d) : canfdi_asr64(xt, (unsigned)d));
     r->err_neg = (v < 0);
-    r->err = (v == 0) ? PF_ZERO : pf_from_u64(r->err_neg ? (0U - (uint64_t)v) : (uint64_t)v, ey);
+    r->err = (v == 0) ? PF_ZERO : pf_from_u64(r->err_neg ? ((uint64_t)(-(v + 1)) + 1U) : (uint64_t)v, ey);
   } else {
     const xf_t e = xf_add(xf_make(y_q16, -16 - (int32_t)r->cfg.y_shift), xf_make(-xt, r->theta_e + ex));
     r->err_neg = (e.m < 0);
@@ -834,7 +836,7 @@ static inline __attribute__((always_inline)) void rls_step(canfdi_rls_t *r, unsi
 static inline __attribute__((always_inline)) uint32_t rls_f(int64_t acc, int32_t e, uint32_t *fm, int32_t *fe)
 {
   const uint32_t neg = (acc < 0) ? 0xFFFFFFFFU : 0U;
-  const uint64_t mag = (neg != 0U) ? (0U - (uint64_t)acc) : (uint64_t)acc;
+  const uint64_t mag = (neg != 0U) ? ((uint64_t)(-(acc + 1)) + 1U) : (uint64_t)acc;
   const uint32_t mh = (uint32_t)(mag >> 32);
   if (mh != 0U) {
     const unsigned sf = canfdi_clz32(mh); /* >= 1 */
