@@ -145,9 +145,9 @@
  * CANFDI_CFG_RLS_MAX_PARAMS = 6 on a 32-bit target (asserted in
  * canfdi_rls.c on the target builds): 4 bytes per U entry and theta, 8 per
  * D element, 12 per regressor for the gate's mean and measure, the cfg
- * copy. Caller-owned, no heap, no globals; an update uses about 400 bytes
- * of stack with n_max = 6 (392 on the Cortex-M0: canfdi_rls_update 144,
- * its column pass 184, the exact trace 64; tests/pil/footprint.py measures
+ * copy. Caller-owned, no heap, no globals; an update uses about 450 bytes
+ * of stack with n_max = 6 (440 on the Cortex-M0: canfdi_rls_update 144,
+ * its column pass 200, the exact trace 96; tests/pil/footprint.py measures
  * the worst case). The reciprocal's seed table is 1028 bytes of flash
  * (core/canfdi_fixp.c).
  */
