@@ -653,4 +653,13 @@ canfdi_q15_t canfdi_q15_sqrt(canfdi_q15_t x);
  */
 canfdi_q31_t canfdi_q31_sqrt(canfdi_q31_t x);
 
+/*
+ * The seed table of canfdi_recip_q63 (core/canfdi_intrin.h):
+ * floor(2^63 / (2^31 + i 2^23)) - 2^15 for i = 0..256 (the first clipped to
+ * 2^32 - 1): 2^63 / v at the 256 interval starts of v in [2^31, 2^32), less
+ * a margin that keeps the linear interpolation between them below 2^63 / v.
+ * 1028 bytes of flash.
+ */
+extern const uint32_t canfdi_recip_seed[257];
+
 #endif /* CANFDI_FIXP_H */

@@ -75,16 +75,113 @@ static inline unsigned canfdi_clz64(uint64_t x)
 }
 
 /*
+ * The 32x32->64 products in plain 16-bit halves: four 16x16->32 multiplies
+ * and the carries, for ARMv6-M, which has no UMULL/SMULL (libgcc's
+ * __aeabi_lmul would multiply 64 by 64 bits). canfdi_umull32,
+ * canfdi_umulhi32 and canfdi_smull32 use them there and the instructions
+ * elsewhere; both are exact, so every core gives the same bits
+ * (tests/unit/test_fixp checks the halves against the host's products).
+ * Scaling and overflow: exact, cannot overflow ("mid" <= 2^32 - 1).
+ */
+static inline uint64_t canfdi_umull32_h16(uint32_t a, uint32_t b)
+{
+  const uint32_t al = a & 0xFFFFU;
+  const uint32_t ah = a >> 16;
+  const uint32_t bl = b & 0xFFFFU;
+  const uint32_t bh = b >> 16;
+  const uint32_t ll = al * bl;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (ah * bl);
+  const uint32_t hi = (ah * bh) + (lh >> 16) + (mid >> 16);
+  return ((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU));
+}
+
+/* The high word only (the low word is not assembled). */
+static inline uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
+{
+  const uint32_t al = a & 0xFFFFU;
+  const uint32_t ah = a >> 16;
+  const uint32_t bl = b & 0xFFFFU;
+  const uint32_t bh = b >> 16;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = ((al * bl) >> 16) + (lh & 0xFFFFU) + (ah * bl);
+  return (ah * bh) + (lh >> 16) + (mid >> 16);
+}
+
+/* Signed: the unsigned product with its high word corrected for the signs. */
+static inline int64_t canfdi_smull32_h16(int32_t a, int32_t b)
+{
+  const uint64_t p = canfdi_umull32_h16((uint32_t)a, (uint32_t)b);
+  const uint32_t c = ((a < 0) ? (uint32_t)b : 0U) + ((b < 0) ? (uint32_t)a : 0U);
+  return canfdi_wrap_u64_to_s64(p - ((uint64_t)c << 32));
+}
+
+/* a b for unsigned 32-bit operands: UMULL (ARMv6-M: the halves). */
+static inline uint64_t canfdi_umull32(uint32_t a, uint32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_umull32_h16(a, b);
+#else
+  return (uint64_t)a * (uint64_t)b;
+#endif
+}
+
+/* floor(a b / 2^32) for unsigned 32-bit operands: UMULL's high word. */
+static inline uint32_t canfdi_umulhi32(uint32_t a, uint32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_umulhi32_h16(a, b);
+#else
+  return (uint32_t)(((uint64_t)a * (uint64_t)b) >> 32);
+#endif
+}
+
+/* a b for signed 32-bit operands: SMULL (ARMv6-M: the halves). */
+static inline int64_t canfdi_smull32(int32_t a, int32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_smull32_h16(a, b);
+#else
+  return (int64_t)a * (int64_t)b;
+#endif
+}
+
+/*
+ * q ~ 2^63 / v for 2^31 <= v < 2^32 (so 2^31 - 1 <= q < 2^32): the
+ * reciprocal of the Q31 number v in [1, 2) as a Q32 number in (1/2, 1],
+ * from below. Scaling and overflow: a seed interpolated linearly between
+ * two entries of canfdi_recip_seed (canfdi_fixp.h; within 2^-16 below
+ * 2^63 / v), then one Newton-Raphson step q (2 - v q / 2^63) with
+ * t = 2^63 - v q >= 0 (below 2^47) in 64 bits. Error: 0 to 2^-30.4
+ * relative (q never exceeds 2^63 / v). No division: the same bits on
+ * every core. Cost: two table loads and three 32x32->64 multiplies.
+ */
+static inline uint32_t canfdi_recip_q63(uint32_t v)
+{
+  const uint32_t i = (v >> 23) & 0xFFU;
+  const uint32_t a = canfdi_recip_seed[i];
+  const uint32_t q0 = a - canfdi_umulhi32(a - canfdi_recip_seed[i + 1U], ((v >> 7) & 0xFFFFU) << 16);
+  const uint64_t t = ((uint64_t)1 << 63) - canfdi_umull32(v, q0);
+  return q0 + canfdi_umulhi32(q0, (uint32_t)(t >> 31));
+}
+
+/*
  * acc + floor((a b + 2^31) / 2^32): adds the product a b, rounded half up to
- * its high word, to acc (the SMMLAR of ARMv7E-M; SMULL + adds elsewhere).
+ * its high word, to acc (the SMMLAR of ARMv7E-M; on ARMv7-M one SMLAL into
+ * the pair (2^31, acc)).
  * Scaling and overflow: a Qa x Qb product lands in Q(a + b - 32); the caller
  * guarantees that the sum fits an int32_t (it does not saturate: the users
  * bound their operands, see model/canfdi_rls.c). Rounding: half up.
  */
 static inline int32_t canfdi_mla_hi_rnd(int32_t acc, int32_t a, int32_t b)
 {
-  const int64_t p = ((int64_t)a * (int64_t)b) + 2147483648LL;
+#if defined(__ARM_ARCH_6M__)
+  const int64_t p = canfdi_smull32(a, b) + 2147483648LL;
   return acc + (int32_t)canfdi_asr64(p, 32U);
+#else
+  const int64_t p = (((int64_t)acc * 4294967296LL) + 2147483648LL) + ((int64_t)a * (int64_t)b);
+  return (int32_t)canfdi_asr64(p, 32U);
+#endif
 }
 
 #endif /* CANFDI_INTRIN_H */

@@ -63,7 +63,7 @@
  * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; default
  * cfg, 4000 steps of an excited operating point around 100 rad/s and 4 A):
  * Cortex-M4 mean 7 000, max 14 300 (a step with an RLS update); Cortex-M0+
- * code mean 14 500, max 27 500. Memory: sizeof(canfdi_est_dcm_t) = 1264
+ * code mean 14 500, max 27 500. Memory: sizeof(canfdi_est_dcm_t) = 1232
  * bytes on a 32-bit target (four SVFs and two RLS instances sized
  * CANFDI_CFG_RLS_MAX_PARAMS).
  */

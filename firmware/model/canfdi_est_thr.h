@@ -124,7 +124,7 @@
  * update): Cortex-M4 mean 17 100, max 28 800 (a step with the mechanical
  * update and the fast test); Cortex-M0+ code mean 34 100, max 56 100
  * (1.2 ms at 48 MHz: on a small M0+ raise decim, the memory 1/(forget
- * rate) scales with it). Memory: sizeof(canfdi_est_thr_t) = 1376 bytes on
+ * rate) scales with it). Memory: sizeof(canfdi_est_thr_t) = 1344 bytes on
  * a 32-bit target.
  */
 #ifndef CANFDI_EST_THR_H

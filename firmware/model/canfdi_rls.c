@@ -14,129 +14,133 @@ typedef canfdi_rls_xf_t xf_t;
 
 /* Block mantissas (regressors, U columns, theta, the gain vector) stay
  * within +-2^30, so that a product of two is below 2^60 and a sum of up to
- * eight of them fits an int64_t. */
+ * eight of them fits an int64_t. A block is renormalised only when it
+ * leaves [2^28, 2^30] (BLK_LO .. BLK_MAX). */
 #define BLK_MAX ((int32_t)1 << 30)
-#define BLK_LO ((int32_t)1 << 29)
+#define BLK_LO ((uint32_t)1 << 28)
 /* Finest exponent of a U column: entries carry 2^-30 absolute resolution at
  * least (the unit diagonal dominates f and P below that). */
 #define U_EMIN (-30)
-/* Smallest D element relative to the scale a0: 2^-60 (see the header). */
+/* Smallest D element: d_j c0 >= about 2^-61 (see the header). */
 #define D_FLOOR_REL 60
-/* Exponent window of a0 (the D elements move with it, exactly). */
-#define A0_EMIN (-200)
-#define A0_EMAX 100
-#define A0_SHIFT 128
+/* Exponent window of c0 (the D elements move against it, exactly). */
+#define C0_EMIN (-100)
+#define C0_EMAX 200
+#define C0_SHIFT 128
+/* The gate's normalised regressor (Q23) is clipped to +-(2^30 - 1), i.e.
+ * +-128, and its deviation from the mean to +-2^30. */
+#define GATE_Z_MAX (((int32_t)1 << 30) - 1)
+#define GATE_DEV_MAX ((int32_t)1 << 30)
+/* The regressor block's fixed format: phi_q16 2^(10 - s) (Q26 normalised,
+ * exact for s <= 10), used whenever every |phi_norm| < 16; and the shifts
+ * for which it is defined (a left shift of 0..30 bits). */
+#define X_FIX_E (-26)
+#define X_SHIFT_MIN (-20)
+#define X_SHIFT_MAX 10
 
 CANFDI_STATIC_ASSERT(CANFDI_CFG_RLS_MAX_PARAMS >= 1U, rls_max_params_positive);
 CANFDI_STATIC_ASSERT(CANFDI_CFG_RLS_MAX_PARAMS <= 7U, rls_max_params_fit_int64_sums);
 #if defined(__arm__)
 /* The size the header states for the default configuration (32-bit ARM). */
-CANFDI_STATIC_ASSERT((CANFDI_CFG_RLS_MAX_PARAMS != 6U) || (sizeof(canfdi_rls_t) == 368U), rls_size_as_stated);
+CANFDI_STATIC_ASSERT((CANFDI_CFG_RLS_MAX_PARAMS != 6U) || (sizeof(canfdi_rls_t) == 352U), rls_size_as_stated);
 #endif
 
 /* ------------------------------------------------------------------------ */
-/* Positive floats m 2^e, m in [2^31, 2^32) or 0                            */
+/* Positive floats (m / 2^32) 2^e, m in [2^31, 2^32)                        */
 /* ------------------------------------------------------------------------ */
 
 static const pf_t PF_ZERO = {0U, 0};
 
-static inline __attribute__((always_inline)) pf_t pf_make(uint32_t m, int32_t e)
+/* Leading zeros of x when x >= 2^30 (0 or 1): one CLZ where it exists, a
+ * shift and an XOR elsewhere (the same value). */
+static inline __attribute__((always_inline)) uint32_t lz01(uint32_t x)
+{
+#if defined(__ARM_FEATURE_CLZ)
+  return canfdi_clz32(x);
+#else
+  return (x >> 31) ^ 1U;
+#endif
+}
+
+/* m 2^e (any m) as a pf; m == 0 gives PF_ZERO. Exact. */
+static pf_t pf_make(uint32_t m, int32_t e)
 {
   pf_t r = PF_ZERO;
   if (m != 0U) {
     const unsigned lz = canfdi_clz32(m);
     r.m = m << lz;
-    r.e = e - (int32_t)lz;
+    r.e = (e + 32) - (int32_t)lz;
   }
   return r;
 }
 
 /*
- * The normalised mantissa m (top bit set) with exponent e, plus one ulp
- * when the first dropped bit rb is set (rounding half up); a carry out of
- * 32 bits renormalises to 2^31 with e + 1.
- */
-static inline __attribute__((always_inline)) pf_t pf_round(uint32_t m, int32_t e, uint32_t rb)
-{
-  pf_t r;
-  r.m = m;
-  r.e = e;
-  if (rb != 0U) {
-    if (m == UINT32_MAX) {
-      r.m = 0x80000000U;
-      r.e += 1;
-    } else {
-      r.m = m + 1U;
-    }
-  }
-  return r;
-}
-
-/*
- * v 2^e rounded to 32 significant bits. Scaling and overflow: exact below
- * 2^32; above, rounded half up, a carry to 2^32 renormalises.
+ * v 2^e (v != 0) as a pf: its top 32 bits, truncated (relative error
+ * below 2^-31). Cost: one or two CLZ and three shifts.
  */
 static inline __attribute__((always_inline)) pf_t pf_from_u64(uint64_t v, int32_t e)
 {
-  pf_t r = PF_ZERO;
+  pf_t r;
   const uint32_t hi = (uint32_t)(v >> 32);
-  if (hi == 0U) {
-    r = pf_make((uint32_t)v, e);
+  const uint32_t lo = (uint32_t)v;
+  if (hi != 0U) {
+    const unsigned s = canfdi_clz32(hi);
+    r.m = (hi << s) | ((lo >> 1) >> (31U - s));
+    r.e = (e + 64) - (int32_t)s;
   } else {
-    const unsigned lz = canfdi_clz32(hi);
-    const unsigned sh = 32U - lz; /* 1..32: bits below the top 32 */
-    const uint64_t t = v >> (sh - 1U);
-    r = pf_round((uint32_t)(t >> 1), e + (int32_t)sh, (uint32_t)(t & 1U));
+    const unsigned s = canfdi_clz32(lo);
+    r.m = lo << s;
+    r.e = (e + 32) - (int32_t)s;
   }
   return r;
 }
 
 /*
- * a b. Scaling and overflow: the 64-bit product of two mantissas lies in
- * [2^62, 2^64); its top 32 bits are kept, rounded half up (a carry
- * renormalises). Relative error <= 2^-32. Exponents add (they stay far
- * inside int32_t: see the header's range statement).
+ * a b for normalised a, b (not zero). Scaling and overflow: the 64-bit
+ * product of the mantissas lies in [2^62, 2^64); its top 32 bits are kept
+ * (one more bit when it is below 2^63), truncated: relative error below
+ * 2^-31. Exponents add (they stay far inside int32_t: see the header's
+ * range statement). Cost: UMULL, CLZ and five ALU instructions.
  */
 static inline __attribute__((always_inline)) pf_t pf_mul(pf_t a, pf_t b)
 {
-  pf_t r = PF_ZERO;
-  if ((a.m != 0U) && (b.m != 0U)) {
-    const uint64_t p = (uint64_t)a.m * (uint64_t)b.m;
-    const uint32_t hi = (uint32_t)(p >> 32);
-    if ((hi & 0x80000000U) == 0U) {
-      r = pf_round((hi << 1) | (uint32_t)((p >> 31) & 1U), a.e + b.e + 31, (uint32_t)((p >> 30) & 1U));
-    } else {
-      r = pf_round(hi, a.e + b.e + 32, (uint32_t)((p >> 31) & 1U));
-    }
-  }
+  const uint64_t p = canfdi_umull32(a.m, b.m);
+  const uint32_t hi = (uint32_t)(p >> 32);
+  const uint32_t s = lz01(hi);
+  pf_t r;
+  r.m = (hi << s) | (((uint32_t)p >> 31) & s);
+  r.e = (a.e + b.e) - (int32_t)s;
   return r;
 }
 
 /*
- * a + b. Scaling and overflow: the smaller addend is aligned to the larger
- * one's last bit (truncated: error < 1 ulp) and the 33-bit sum is
- * renormalised with rounding half up.
+ * a + b for normalised a, b (not zero). Scaling and overflow: the smaller
+ * addend is aligned to the larger one (its bits below the larger one's last
+ * are dropped) and a carry out of 32 bits shifts the sum down one bit
+ * (dropped): error below 2 ulp.
  */
 static inline __attribute__((always_inline)) pf_t pf_add(pf_t a, pf_t b)
 {
-  pf_t r = a;
-  if (a.m == 0U) {
-    r = b;
-  } else if (b.m != 0U) {
-    const pf_t hi = (a.e >= b.e) ? a : b;
-    const pf_t lo = (a.e >= b.e) ? b : a;
-    const int32_t d = hi.e - lo.e;
-    if (d < 32) {
-      r = pf_from_u64((uint64_t)hi.m + (uint64_t)(lo.m >> (unsigned)d), hi.e);
-    } else {
-      r = hi;
-    }
+  const bool swap = (b.e > a.e);
+  const uint32_t hm = swap ? b.m : a.m;
+  const uint32_t lm = swap ? a.m : b.m;
+  const int32_t he = swap ? b.e : a.e;
+  const uint32_t d = (uint32_t)(he - (swap ? a.e : b.e));
+  const uint32_t l = (d < 32U) ? (lm >> d) : 0U;
+  const uint64_t s = (uint64_t)hm + l;
+  pf_t r;
+  if (s > 0xFFFFFFFFU) {
+    r.m = (uint32_t)(s >> 1);
+    r.e = he + 1;
+  } else {
+    r.m = (uint32_t)s;
+    r.e = he;
   }
   return r;
 }
 
-/* a < b */
-static inline __attribute__((always_inline)) bool pf_lt(pf_t a, pf_t b)
+/* a < b for pf values (zero allowed). */
+static bool pf_lt(pf_t a, pf_t b)
 {
   bool lt;
   if ((a.m == 0U) || (b.m == 0U)) {
@@ -148,60 +152,22 @@ static inline __attribute__((always_inline)) bool pf_lt(pf_t a, pf_t b)
 }
 
 /*
- * 1 / a for a > 0: round(2^63 / m) 2^(-e-63). Scaling and overflow: a
- * 16-bit quotient (one 32-bit division) seeds one Newton-Raphson step,
- * q (2 - m q / 2^63), which leaves an error of a few units; the remainder
- * 2^63 - m q then corrects q to the exact floor, and the last step rounds
- * half up. m = 2^31 gives 2^32, stored as 2^31 2^(e'+1). Cost: one UDIV
- * (__aeabi_uidiv on ARMv6-M), three 32x32->64 multiplies, a few
- * corrections.
+ * 1 / a for a > 0: q 2^(1 - e - 32) with q ~ 2^63 / m (canfdi_recip_q63:
+ * from below, within 2^-30.4), normalised. Cost: two table loads, three
+ * 32x32->64 multiplies.
  */
 static pf_t pf_recip(pf_t a)
 {
-  pf_t r = PF_ZERO;
-  CANFDI_ASSERT(a.m != 0U);
-  if (a.m != 0U) {
-    const uint64_t one = (uint64_t)1 << 63;
-    const uint32_t q0 = 0xFFFFFFFFU / ((a.m >> 16) + 1U); /* ~2^48 / m, < 2^17 */
-    uint64_t q = (uint64_t)q0 << 15;                     /* ~2^63 / m, low */
-    int64_t t = (int64_t)(one - (uint64_t)a.m * q);      /* > 0, < 2^49 */
-    q += (q * (uint64_t)(t >> 20)) >> 43;
-    t = canfdi_wrap_u64_to_s64(one - ((uint64_t)a.m * q));
-    while (t < 0) {
-      q -= 1U;
-      t += (int64_t)a.m;
-    }
-    while (t >= (int64_t)a.m) {
-      q += 1U;
-      t -= (int64_t)a.m;
-    }
-    if ((uint64_t)t >= (uint64_t)((a.m + 1U) >> 1)) {
-      q += 1U;
-    }
-    r = pf_from_u64(q, -a.e - 63);
+  const uint32_t q = canfdi_recip_q63(a.m);
+  pf_t r;
+  CANFDI_ASSERT(a.m >= 0x80000000U);
+  r.m = q;
+  r.e = 1 - a.e;
+  if (q < 0x80000000U) {
+    r.m = q << 1;
+    r.e -= 1;
   }
   return r;
-}
-
-/*
- * round(a 2^-s) as an int32_t multiplier with the sign neg, for s >= 2
- * (|result| <= 2^30). Scaling and overflow: the caller picks s so that the
- * product of the multiplier with a block mantissa lands in the target
- * block's format; s >= 2 keeps it below 2^30 + 1. Rounding half up on the
- * magnitude; s > 32 gives 0.
- */
-static inline __attribute__((always_inline)) int32_t pf_to_fix(pf_t a, int32_t s, bool neg)
-{
-  uint32_t v = 0U;
-  CANFDI_ASSERT(s >= 2);
-  if ((s >= 2) && (s <= 31)) {
-    v = (a.m >> (unsigned)s) + ((a.m >> (unsigned)(s - 1)) & 1U);
-  } else if (s == 32) {
-    v = a.m >> 31;
-  } else {
-    /* below half a unit: 0 */
-  }
-  return neg ? -(int32_t)v : (int32_t)v;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -216,12 +182,16 @@ static xf_t xf_make(int64_t v, int32_t e)
   if (v != 0) {
     const bool neg = (v < 0);
     const uint64_t mag = neg ? ((uint64_t)(-(v + 1)) + 1U) : (uint64_t)v;
-    const pf_t p = pf_from_u64(mag, e);
-    const uint32_t m = (p.m >> 2) + ((p.m >> 1) & 1U);
-    r.e = p.e + 2;
-    r.m = (int32_t)((m == 0x40000000U) ? 0x20000000U : m);
-    r.e += (m == 0x40000000U) ? 1 : 0;
-    r.m = neg ? -r.m : r.m;
+    const unsigned z = canfdi_clz64(mag); /* 0 only for 2^63 (INT64_MIN) */
+    const uint64_t t = (z == 0U) ? (mag >> 1) : (mag << (z - 1U)); /* top bit at 62 */
+    const int32_t et = (e - (int32_t)z) + 1;
+    uint32_t m = (uint32_t)(t >> 33) + (uint32_t)((t >> 32) & 1U);
+    r.e = et + 33;
+    if (m == 0x40000000U) {
+      m = 0x20000000U;
+      r.e += 1;
+    }
+    r.m = neg ? -(int32_t)m : (int32_t)m;
   }
   return r;
 }
@@ -252,7 +222,7 @@ static xf_t xf_add(xf_t a, xf_t b)
 static xf_t xf_from_pf(pf_t a, bool neg)
 {
   const int64_t v = (int64_t)a.m;
-  return xf_make(neg ? -v : v, a.e);
+  return xf_make(neg ? -v : v, a.e - 32);
 }
 
 /* round(a 2^frac), saturated to int32_t. */
@@ -293,19 +263,24 @@ static uint32_t mag32(int32_t x)
   return (x < 0) ? (0U - (uint32_t)x) : (uint32_t)x;
 }
 
-/*
- * floor((x + 2^(k-1)) / 2^k) for k in 1..31 on the two 32-bit halves (a
- * run-time 64-bit shift is ~25 instructions on ARMv7-M and a libgcc call on
- * ARMv6-M; this is ~8). Scaling and overflow: |x| < 2^62, so the rounding
- * add cannot overflow. Rounding: half up.
- */
-static inline int64_t asr64_rnd_k(int64_t x, unsigned k)
+/* |x| for x >= 0 and |x| - 1 for x < 0: the bits a block's OR needs (a
+ * value is within +-2^30 iff this is below 2^30, -2^30 aside). One EOR. */
+static inline __attribute__((always_inline)) uint32_t magbits(int32_t x)
 {
-  const uint64_t u = (uint64_t)x + ((uint64_t)1 << (k - 1U));
-  const uint32_t hi = (uint32_t)(u >> 32);
-  const uint32_t lo = ((uint32_t)u >> k) | (hi << (32U - k));
-  const int32_t h = canfdi_asr32(canfdi_wrap_u32_to_s32(hi), k);
-  return canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)h << 32) | lo);
+  return (uint32_t)x ^ (uint32_t)canfdi_asr32(x, 31U);
+}
+
+/* floor(x 2^-k) for k in 0..31: one ASR (canfdi_asr32 without its clamp). */
+static inline __attribute__((always_inline)) int32_t asr_k(int32_t x, unsigned k)
+{
+  return (x >= 0) ? (x >> k) : (-1 - ((-1 - x) >> k));
+}
+
+/* round(x 2^-k), half up, for k in 1..31 (canfdi_asr32_rnd, always
+ * inline: an ASR, an LSR, an AND and an ADD). */
+static inline __attribute__((always_inline)) int32_t asr_rnd(int32_t x, unsigned k)
+{
+  return asr_k(x, k) + (int32_t)(((uint32_t)x >> (k - 1U)) & 1U);
 }
 
 /* v[0..n-1] *= 2^-k with rounding (k >= 1; k > 31 clears). Scaling: the
@@ -319,28 +294,26 @@ static void blk_shr(int32_t v[], unsigned n, unsigned k)
 }
 
 /*
- * Renormalises a block v[0..n-1] with exponent *e so that its largest
- * magnitude lies in [2^29, 2^30], or *e reaches emin. Scaling and
- * overflow: entries below 2^31 on entry (the callers' sums stay below
- * 2^30 + 2^28); a right shift rounds half up, a left shift is exact.
+ * Keeps a block v[0..n-1] with exponent *e in its format, given acc, the OR
+ * of magbits() of its entries: above 2^30 it is shifted down one bit
+ * (rounded half up; entries are below 2^31 on entry: the callers' updates
+ * add at most 2^27 to entries within 2^30), below 2^28 it is shifted up so
+ * that its largest magnitude lies in [2^29, 2^30), or until *e reaches emin
+ * (exact). In between it is left alone: the block keeps 28 to 30 bits.
  */
-static void blk_norm(int32_t v[], unsigned n, int32_t *e, int32_t emin)
+static void blk_fit(int32_t v[], unsigned n, uint32_t acc, int32_t *e, int32_t emin)
 {
-  uint32_t acc = 0U;
   unsigned i;
-  for (i = 0U; i < n; i++) {
-    acc |= mag32(v[i]);
-  }
-  if (acc > (uint32_t)BLK_MAX) {
+  if (acc >= (uint32_t)BLK_MAX) {
     blk_shr(v, n, 1U);
     *e += 1;
-  } else if ((acc != 0U) && (acc < (uint32_t)BLK_LO) && (*e > emin)) {
-    int32_t k = (int32_t)canfdi_clz32(acc) - 2; /* acc < 2^30 */
+  } else if ((acc != 0U) && (acc < BLK_LO) && (*e > emin)) {
+    int32_t k = (int32_t)canfdi_clz32(acc) - 2; /* acc < 2^28: k >= 2 */
     if (k > (*e - emin)) {
       k = *e - emin;
     }
     for (i = 0U; i < n; i++) {
-      v[i] = v[i] * ((int32_t)1 << (unsigned)k); /* k <= 29 and |v| 2^k < 2^30: exact */
+      v[i] = v[i] * ((int32_t)1 << (unsigned)k); /* |v| 2^k < 2^30: exact */
     }
     *e -= k;
   } else {
@@ -348,23 +321,20 @@ static void blk_norm(int32_t v[], unsigned n, int32_t *e, int32_t emin)
   }
 }
 
-/* U column j (entries u_0j .. u_(j-1)j) */
-static int32_t *u_col(canfdi_rls_t *r, unsigned j)
+static uint32_t blk_bits(const int32_t v[], unsigned n)
 {
-  return &r->u[u_base(j)];
-}
-
-static void u_col_norm(canfdi_rls_t *r, unsigned j)
-{
-  int32_t e = r->u_e[j];
-  blk_norm(u_col(r, j), j, &e, U_EMIN);
-  r->u_e[j] = (int16_t)e;
+  uint32_t acc = 0U;
+  unsigned i;
+  for (i = 0U; i < n; i++) {
+    acc |= magbits(v[i]);
+  }
+  return acc;
 }
 
 /* ------------------------------------------------------------------------ */
 
 /* trace of the stored factors: sum_j d_j (1 + sum_i u_ij^2); trace(P) is
- * this / a0. */
+ * this times c0. */
 static pf_t rls_trace_stored(const canfdi_rls_t *r)
 {
   const unsigned n = r->cfg.n_params;
@@ -373,30 +343,19 @@ static pf_t rls_trace_stored(const canfdi_rls_t *r)
   unsigned j;
   for (j = 0U; j < n; j++) {
     uint64_t s2 = 0U;
-    pf_t c;
+    pf_t c = pf_make(1U, 0);
+    pf_t t;
     for (i = 0U; i < j; i++) {
       const int64_t u = r->u[u_idx(i, j)];
       s2 += (uint64_t)(u * u);
     }
-    c = pf_add(pf_make(1U, 0), pf_from_u64(s2, 2 * (int32_t)r->u_e[j]));
-    tr = pf_add(tr, pf_mul(r->d[j], c));
+    if (s2 != 0U) {
+      c = pf_add(c, pf_from_u64(s2, 2 * (int32_t)r->u_e[j]));
+    }
+    t = pf_mul(r->d[j], c);
+    tr = (tr.m == 0U) ? t : pf_add(tr, t);
   }
   return tr;
-}
-
-/* Exponent T such that the stored trace is below 2^T: d_j < 2^(e_j + 32),
- * 1 + sum_i u_ij^2 <= n max(1, 2^(2 u_e + 60)). */
-static int32_t rls_trace_bound_exp(const canfdi_rls_t *r)
-{
-  const unsigned n = r->cfg.n_params;
-  int32_t t = INT32_MIN;
-  unsigned j;
-  for (j = 0U; j < n; j++) {
-    const int32_t ue = 2 * ((int32_t)r->u_e[j] - U_EMIN);
-    const int32_t c = r->d[j].e + 32 + ue;
-    t = (c > t) ? c : t;
-  }
-  return t + 2 * (int32_t)r->clog2n;
 }
 
 int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg)
@@ -417,9 +376,15 @@ int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg)
     }
     if (ok) {
       r->cfg = *cfg;
-      r->lambda = pf_make((uint32_t)((int64_t)2147483648LL - (int64_t)cfg->forget_q31), -31);
+      r->inv_lambda = pf_recip(pf_make((uint32_t)((int64_t)2147483648LL - (int64_t)cfg->forget_q31), -31));
+      r->trb_grow = pf_mul(r->inv_lambda, pf_make(0x80000800U, -31)); /* (1 + 2^-20) */
       r->trace_max = pf_make((uint32_t)cfg->trace_max_q16, -16);
-      r->inv_trace_max = pf_recip(r->trace_max);
+      r->fixed_x = true;
+      for (i = 0U; i < cfg->n_params; i++) {
+        if ((cfg->phi_shift[i] < X_SHIFT_MIN) || (cfg->phi_shift[i] > X_SHIFT_MAX)) {
+          r->fixed_x = false;
+        }
+      }
       r->clog2n = 0U;
       while ((1U << r->clog2n) < cfg->n_params) {
         r->clog2n++;
@@ -428,6 +393,7 @@ int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg)
       r->diag.skipped = 0U;
       r->diag.trace_clips = 0U;
       r->diag.resets = 0U;
+      r->diag.boosts = 0U;
       r->diag.saturations = 0U;
       canfdi_rls_reset(r, false);
       r->diag.resets = 0U;
@@ -437,25 +403,35 @@ int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg)
   return out;
 }
 
+/* P = p0 I: c0 = 1, D = p0, U = I (column exponents at their floor). */
+static void rls_p0(canfdi_rls_t *r)
+{
+  unsigned i;
+  r->c0 = pf_make(1U, 0);
+  for (i = 0U; i < NMAX; i++) {
+    r->d[i] = (i < r->cfg.n_params) ? pf_make((uint32_t)r->cfg.p0_q16, -16) : PF_ZERO;
+    r->u_e[i] = (int16_t)U_EMIN;
+  }
+  for (i = 0U; i < CANFDI_RLS_N_U; i++) {
+    r->u[i] = 0;
+  }
+  r->trb = rls_trace_stored(r);
+}
+
 void canfdi_rls_reset(canfdi_rls_t *r, bool keep_theta)
 {
   unsigned i;
   CANFDI_ASSERT(r != NULL);
-  r->a0 = pf_make(1U, 0);
+  rls_p0(r);
   for (i = 0U; i < NMAX; i++) {
-    r->d[i] = (i < r->cfg.n_params) ? pf_make((uint32_t)r->cfg.p0_q16, -16) : PF_ZERO;
-    r->u_e[i] = (int16_t)U_EMIN;
     r->mean[i] = 0;
     r->excite[i] = 0;
-  }
-  for (i = 0U; i < CANFDI_RLS_N_U; i++) {
-    r->u[i] = 0;
   }
   if (!keep_theta) {
     for (i = 0U; i < NMAX; i++) {
       r->theta[i] = 0;
     }
-    r->theta_e = 0;
+    r->theta_e = CANFDI_RLS_THETA_EMIN;
     for (i = 0U; i < r->cfg.n_params; i++) {
       canfdi_rls_set_theta_qn(r, i, r->cfg.theta0_q16[i], 16U);
     }
@@ -469,347 +445,503 @@ void canfdi_rls_reset(canfdi_rls_t *r, bool keep_theta)
 
 void canfdi_rls_boost(canfdi_rls_t *r)
 {
-  unsigned i;
   CANFDI_ASSERT(r != NULL);
   /* P = p0 I as canfdi_rls_reset, nothing else touched */
-  r->a0 = pf_make(1U, 0);
-  for (i = 0U; i < NMAX; i++) {
-    r->d[i] = (i < r->cfg.n_params) ? pf_make((uint32_t)r->cfg.p0_q16, -16) : PF_ZERO;
-    r->u_e[i] = (int16_t)U_EMIN;
-  }
-  for (i = 0U; i < CANFDI_RLS_N_U; i++) {
-    r->u[i] = 0;
-  }
+  rls_p0(r);
   canfdi_count_inc(&r->diag.boosts);
 }
 
-static bool rls_gated(const canfdi_rls_t *r, unsigned i)
+/* The gated regressors as a bit mask (excite_mask, or all when 0). */
+static unsigned rls_gate_mask(const canfdi_rls_t *r)
 {
-  return (r->cfg.excite_mask == 0U) || (((unsigned)r->cfg.excite_mask >> i) & 1U) != 0U;
+  const unsigned m = r->cfg.excite_mask;
+  return (m != 0U) ? m : ((1U << r->cfg.n_params) - 1U);
 }
 
-/* The gate's measure in Q48: the minimum over the gated regressors. */
-static int64_t rls_excitation_q48(const canfdi_rls_t *r)
+/* The gate's measure in Q46: the minimum over the gated regressors. */
+static int64_t rls_excitation_q46(const canfdi_rls_t *r)
 {
   int64_t m = INT64_MAX;
-  unsigned i;
-  for (i = 0U; i < r->cfg.n_params; i++) {
-    if (rls_gated(r, i) && (r->excite[i] < m)) {
+  unsigned mask = rls_gate_mask(r);
+  unsigned i = 0U;
+  while (mask != 0U) {
+    if (((mask & 1U) != 0U) && (r->excite[i] < m)) {
       m = r->excite[i];
     }
+    mask >>= 1;
+    i++;
   }
   return m;
 }
 
 /*
- * Excitation measure and gate; updates the running means of the gated
- * regressors (the others are never read). Scaling and overflow: phi 2^16
- * and the mean in Q32.32 physical (|.| < 2^47, the deviation < 2^48); the
- * deviation normalised to Q24 (shift 8 + s_i, rounded half up) saturates
- * at +-128, so its square (Q48) stays below 2^62 and the filtered measure
- * below 2^14; the filters round half up.
+ * floor(x / 2^k) for k in 1..31 on the two 32-bit halves (a run-time
+ * 64-bit shift is a libgcc call on ARMv6-M). Scaling and overflow: format-
+ * agnostic, cannot overflow. Rounding: floor.
  */
-static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[])
+static inline __attribute__((always_inline)) int64_t asr64_k(int64_t x, unsigned k)
+{
+  const uint64_t u = (uint64_t)x;
+  const uint32_t hi = (uint32_t)(u >> 32);
+  const uint32_t lo = ((uint32_t)u >> k) | (hi << (32U - k));
+  const int32_t h = asr_k(canfdi_wrap_u32_to_s32(hi), k);
+  return canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)h << 32) | lo);
+}
+
+/* The gate's normalised regressor phi_q16 2^(7 - s) in Q23, clipped to
+ * +-(2^30 - 1) (i.e. +-128): a left shift with saturation or a right shift
+ * rounded half up. */
+static int32_t gate_z(int32_t p, int32_t s)
+{
+  const int32_t l = 7 - s;
+  int32_t z;
+  if (l >= 0) {
+    const int32_t lim = (l > 30) ? 0 : (GATE_Z_MAX >> (unsigned)l);
+    const int32_t pc = (p > lim) ? lim : ((p < -lim) ? -lim : p);
+    z = pc * ((int32_t)1 << (unsigned)((l > 30) ? 0 : l));
+  } else {
+    z = canfdi_asr32_rnd(p, (unsigned)-l); /* |z| <= 2^30 */
+    z = (z > GATE_Z_MAX) ? GATE_Z_MAX : ((z < -GATE_Z_MAX) ? -GATE_Z_MAX : z);
+  }
+  return z;
+}
+
+/*
+ * The regressors as one block x[i] 2^ex (normalised units, |x| <= 2^30) and
+ * x^T theta (one exact 64-bit sum: products below 2^60); returns ex.
+ * Fixed format when the configuration allows it and every |phi_norm| < 16:
+ * x = phi_q16 2^(10 - s) exactly, ex = -26. Otherwise a dynamic block, the
+ * largest in [2^29, 2^30]: phi_i 2^-(16 + s_i) is shifted exactly (left) or
+ * rounded half up (right, when regressors differ by more than 2^30 in
+ * normalised size: the small one keeps fewer bits, see the header).
+ */
+static int32_t rls_block(const canfdi_rls_t *r, const int32_t phi_q16[], int32_t x[], int64_t *xt, bool *xfix)
 {
   const unsigned n = r->cfg.n_params;
+  int32_t ex = X_FIX_E;
+  int64_t acc = 0;
+  bool fits;
+  uint32_t over = r->fixed_x ? 0U : 1U;
+  unsigned i;
+  if (over == 0U) {
+    for (i = 0U; i < n; i++) {
+      const int32_t p = phi_q16[i];
+      const int32_t sh = (int32_t)r->cfg.phi_shift[i]; /* -20..10 */
+      const uint32_t o = magbits(p) >> (unsigned)(20 + sh); /* |p| 2^(10 - s) > 2^30 */
+      const int32_t v = (o == 0U) ? (p * ((int32_t)1 << (unsigned)(10 - sh))) : 0;
+      over |= o;
+      x[i] = v;
+      acc += canfdi_smull32(r->theta[i], v);
+    }
+  }
+  fits = (over == 0U);
+  if (!fits) {
+    int32_t top = INT32_MIN;
+    acc = 0;
+    for (i = 0U; i < n; i++) {
+      const uint32_t m = mag32(phi_q16[i]);
+      if (m != 0U) {
+        const int32_t t = (16 - (int32_t)canfdi_clz32(m)) - (int32_t)r->cfg.phi_shift[i];
+        top = (t > top) ? t : top;
+      }
+    }
+    ex = (top == INT32_MIN) ? 0 : (top - 30);
+    for (i = 0U; i < n; i++) {
+      const int32_t p = phi_q16[i];
+      const int32_t l = (-16 - (int32_t)r->cfg.phi_shift[i]) - ex; /* left shift */
+      int32_t v = 0;
+      if (p == 0) {
+        /* its shift may exceed 31 (only a nonzero regressor bounds it) */
+      } else if (l >= 0) {
+        v = p * ((int32_t)1 << (unsigned)l); /* < 2^30 by choice of ex */
+      } else {
+        v = canfdi_asr32_rnd(p, (unsigned)-l);
+      }
+      x[i] = v;
+      acc += canfdi_smull32(r->theta[i], v);
+    }
+  }
+  *xt = acc;
+  *xfix = fits;
+  return ex;
+}
+
+/*
+ * Excitation measure and gate; updates the running means of the gated
+ * regressors (the others are never read). The normalised regressor z in
+ * Q23 (gate_z; from the block when it has the fixed format: round(x / 8),
+ * the same value) is clipped to +-(2^30 - 1) (+-128 normalised). Scaling
+ * and overflow: z and its mean (a convex combination of such values,
+ * rounded half up: dead zone 2^(k-24) normalised, which adds at most
+ * 2^(2k-48) to the measure) give a deviation below 2^31; it is clipped to
+ * +-2^30, so its square (Q46) stays below 2^60 and the filtered measure
+ * too (floor: at most 2^-46 low).
+ */
+static bool rls_gate(canfdi_rls_t *r, const int32_t phi_q16[], const int32_t x[], bool xfix)
+{
   const unsigned k = r->cfg.excite_shift;
+  unsigned mask = rls_gate_mask(r);
   int64_t m = INT64_MAX;
   unsigned i;
-  for (i = 0U; i < n; i++) {
-    if (rls_gated(r, i)) {
-      const int64_t x = (int64_t)phi_q16[i] * 65536;
-      const int32_t sh = 8 + (int32_t)r->cfg.phi_shift[i];
-      int64_t dev;
-      int64_t dn;
-      int64_t ex;
-      if (!r->primed) {
-        r->mean[i] = x;
-        r->excite[i] = 0;
-      }
-      dev = x - r->mean[i];
-      r->mean[i] += asr64_rnd_k(dev, k);
-      if ((sh >= 1) && (sh <= 31)) {
-        dn = asr64_rnd_k(dev, (unsigned)sh);
-      } else {
-        dn = (sh >= 0) ? canfdi_asr64_rnd(dev, (unsigned)sh) : canfdi_shl64_sat(dev, (unsigned)-sh);
-      }
-      dn = (dn > INT32_MAX) ? INT32_MAX : ((dn < -INT32_MAX) ? -INT32_MAX : dn);
-      ex = r->excite[i];
-      ex += asr64_rnd_k(((int64_t)(int32_t)dn * (int32_t)dn) - ex, k);
+  if (!r->primed) {
+    for (i = 0U; i < r->cfg.n_params; i++) {
+      r->mean[i] = xfix ? asr_rnd(x[i], 3U) : gate_z(phi_q16[i], r->cfg.phi_shift[i]);
+      r->excite[i] = 0;
+    }
+    r->primed = true;
+  }
+  i = 0U;
+  while (mask != 0U) {
+    if ((mask & 1U) != 0U) {
+      const int32_t z = xfix ? asr_rnd(x[i], 3U) : gate_z(phi_q16[i], r->cfg.phi_shift[i]);
+      int32_t dev = z - r->mean[i];
+      int64_t ex = r->excite[i];
+      r->mean[i] += asr_rnd(dev, k);
+      dev = (dev > GATE_DEV_MAX) ? GATE_DEV_MAX : ((dev < -GATE_DEV_MAX) ? -GATE_DEV_MAX : dev);
+      ex += asr64_k(canfdi_smull32(dev, dev) - ex, k);
       r->excite[i] = ex;
       m = (ex < m) ? ex : m;
     }
+    mask >>= 1;
+    i++;
   }
-  r->primed = true;
-  return (r->cfg.excite_min_q16 == 0) || (m >= ((int64_t)r->cfg.excite_min_q16 * 4294967296LL));
+  return (r->cfg.excite_min_q16 == 0) || (m >= ((int64_t)r->cfg.excite_min_q16 * 1073741824LL));
 }
 
 /*
- * The regressors as one block x[i] 2^*ex (normalised units, |x| <= 2^30,
- * the largest in [2^29, 2^30]). Scaling and overflow: phi_i 2^-(16 + s_i)
- * is shifted exactly (left) or rounded half up (right, when regressors
- * differ by more than 2^30 in normalised size: the small one keeps fewer
- * bits, see the header).
+ * The prediction error y_norm - x^T theta as a float with sign (r->err,
+ * r->err_neg), from xt = x^T theta 2^-(theta_e + ex). Scaling and overflow:
+ * xt is aligned to y 2^16 (16 guard bits below y's last bit, floor), the
+ * difference below 2^49. When the sum carries bits above that
+ * format (theta or x beyond their usual range) the signed xf path takes
+ * over (rounded to 30 bits).
  */
-static void rls_phi_block(const canfdi_rls_t *r, const int32_t phi_q16[], int32_t x[], int32_t *ex)
+static void rls_error(canfdi_rls_t *r, int64_t xt, int32_t ex, int32_t y_q16)
 {
-  const unsigned n = r->cfg.n_params;
-  int32_t top = INT32_MIN;
-  unsigned i;
-  for (i = 0U; i < n; i++) {
-    const uint32_t m = mag32(phi_q16[i]);
-    if (m != 0U) {
-      const int32_t t = (32 - (int32_t)canfdi_clz32(m)) - 16 - (int32_t)r->cfg.phi_shift[i];
-      top = (t > top) ? t : top;
-    }
-  }
-  *ex = (top == INT32_MIN) ? 0 : (top - 30);
-  for (i = 0U; i < n; i++) {
-    const int32_t l = -16 - (int32_t)r->cfg.phi_shift[i] - *ex; /* left shift */
-    if (phi_q16[i] == 0) {
-      x[i] = 0; /* its shift may exceed 31 (only a nonzero regressor bounds it) */
-    } else if (l >= 0) {
-      const uint32_t m = mag32(phi_q16[i]) << (unsigned)l; /* < 2^30 by choice of ex */
-      x[i] = (phi_q16[i] < 0) ? -(int32_t)m : (int32_t)m;
-    } else {
-      x[i] = canfdi_asr32_rnd(phi_q16[i], (unsigned)-l);
-    }
-  }
-}
-
-/*
- * y_norm - x^T theta as a float with sign. Scaling and overflow: x^T theta
- * is one exact 64-bit sum (products below 2^60); it is aligned to y 2^16
- * (16 guard bits below y's last bit) with rounding half up, the difference
- * below 2^49. When the sum carries bits above that format (theta or x
- * beyond their usual range) the signed xf path takes over (rounded to 30
- * bits).
- */
-static pf_t rls_error(const canfdi_rls_t *r, const int32_t x[], int32_t ex, int32_t y_q16, bool *neg)
-{
-  const unsigned n = r->cfg.n_params;
   const int32_t ey = -32 - (int32_t)r->cfg.y_shift; /* y 2^16 */
   const int32_t d = ey - (r->theta_e + ex);
-  int64_t acc = 0;
-  pf_t out;
-  unsigned i;
-  for (i = 0U; i < n; i++) {
-    acc += (int64_t)r->theta[i] * (int64_t)x[i];
-  }
-  if ((d >= 1) && (d <= 31)) {
-    const int64_t v = ((int64_t)y_q16 * 65536) - asr64_rnd_k(acc, (unsigned)d);
-    *neg = (v < 0);
-    out = pf_from_u64(*neg ? (uint64_t)(-v) : (uint64_t)v, ey);
-  } else if (d > 31) {
-    const int64_t v = ((int64_t)y_q16 * 65536) - canfdi_asr64_rnd(acc, (unsigned)d);
-    *neg = (v < 0);
-    out = pf_from_u64(*neg ? (uint64_t)(-v) : (uint64_t)v, ey);
+  if (d >= 1) {
+    const int64_t v = ((int64_t)y_q16 * 65536) - ((d <= 31) ? asr64_k(xt, (unsigned)d) : canfdi_asr64(xt, (unsigned)d));
+    r->err_neg = (v < 0);
+    r->err = (v == 0) ? PF_ZERO : pf_from_u64(r->err_neg ? ((uint64_t)(-(v + 1)) + 1U) : (uint64_t)v, ey);
   } else {
-    const xf_t e = xf_add(xf_make(y_q16, -16 - (int32_t)r->cfg.y_shift), xf_make(-acc, r->theta_e + ex));
-    *neg = (e.m < 0);
-    out = pf_make(mag32(e.m), e.e);
+    const xf_t e = xf_add(xf_make(y_q16, -16 - (int32_t)r->cfg.y_shift), xf_make(-xt, r->theta_e + ex));
+    r->err_neg = (e.m < 0);
+    r->err = pf_make(mag32(e.m), e.e);
   }
-  return out;
 }
 
-/* Inverses of a[1..n] with one reciprocal (prefix products, then back). */
-static void rls_inverses(const pf_t a[], pf_t inv[], unsigned n)
+/* trunc(m 2^-s) with the sign mask neg (0 or all ones), for a mantissa
+ * m < 2^32 and s >= 1 (|result| <= 2^31 - 1); s > 31 gives 0. Truncation
+ * toward zero (one unit of the multiplier at most). */
+static inline __attribute__((always_inline)) int32_t fix_mul(uint32_t m, int32_t s, uint32_t neg)
 {
-  pf_t pre[NMAX + 1U];
-  pf_t q;
-  unsigned j;
-  pre[1] = a[1];
-  for (j = 2U; j <= n; j++) {
-    pre[j] = pf_mul(pre[j - 1U], a[j]);
+  const uint32_t v = (s <= 31) ? (m >> (unsigned)s) : 0U;
+  CANFDI_ASSERT(s >= 1);
+  return canfdi_wrap_u32_to_s32((v ^ neg) - neg);
+}
+
+/* The out-of-format part of blk_fit: called only when acc is outside
+ * [2^28, 2^30) (or the exponent could still fall). */
+static inline __attribute__((always_inline)) void blk_keep(int32_t v[], unsigned n, uint32_t acc, int32_t *e,
+                                                          int32_t emin)
+{
+  if ((acc >= (uint32_t)BLK_MAX) || ((acc < BLK_LO) && (acc != 0U) && (*e > emin))) {
+    blk_fit(v, n, acc, e, emin);
   }
-  q = pf_recip(pre[n]);
-  for (j = n; j >= 2U; j--) {
-    inv[j] = pf_mul(q, pre[j - 1U]);
-    q = pf_mul(q, a[j]);
-  }
-  inv[1] = q;
 }
 
 /*
- * f = U^T x (f_j = x_j + sum_i u_ij x_i, one 64-bit sum per column: the
- * products are below 2^60, x_j 2^-u_e below 2^60), g = D f (g has f's
- * sign: d > 0) and a[j + 1] = a[j] + f_j g_j.
+ * Bierman's update of column j >= 1 (f_j != 0): for i < j
+ * u_ij += b_i mu_j (mu_j = -f_j / a_j = -h, multiplier mm) and
+ * b_i += u_ij g_j (old u_ij; multiplier gg). Scaling and overflow: the gain
+ * block b[] 2^eb keeps every partial sum below 2^30 (see rls_apply); each
+ * multiplier is an int32_t (shift >= 1), so an update adds less than 2^29
+ * to an entry within 2^30. A column whose update would need a larger
+ * multiplier is shifted down in the same loop (its exponent rises); the
+ * column is then kept in format (blk_keep). Rounding: half up in every
+ * product (canfdi_mla_hi_rnd) and shift; the multipliers are truncated.
  */
-static void rls_forward(const canfdi_rls_t *r, const int32_t x[], int32_t ex, pf_t f[], bool fneg[], pf_t g[],
-                        pf_t a[])
+static void rls_column(int32_t col[], unsigned j, int16_t *col_e, uint32_t hm, int32_t he, uint32_t gm, int32_t ge,
+                       uint32_t neg, int32_t b[], int32_t eb)
+{
+  int32_t ue = (int32_t)*col_e;
+  const int32_t s = (ue - eb) - he;
+  const int32_t gg = fix_mul(gm, (eb - ue) - ge, neg);
+  uint32_t acc = 0U;
+  unsigned i;
+  if (s >= 1) {
+    const int32_t mm = fix_mul(hm, s, ~neg);
+    for (i = 0U; i < j; i++) {
+      const int32_t uo = col[i];
+      const int32_t un = canfdi_mla_hi_rnd(uo, b[i], mm);
+      col[i] = un;
+      acc |= magbits(un);
+      b[i] = canfdi_mla_hi_rnd(b[i], uo, gg);
+    }
+  } else {
+    /* the column outgrows its format: shifted down so that the
+     * multiplier fits (s = 1); b takes the old entries */
+    const unsigned sh = (unsigned)(1 - s);
+    const int32_t mm = fix_mul(hm, 1, ~neg);
+    ue += 1 - s;
+    for (i = 0U; i < j; i++) {
+      const int32_t uo = col[i];
+      const int32_t un = canfdi_mla_hi_rnd(canfdi_asr32_rnd(uo, sh), b[i], mm);
+      col[i] = un;
+      acc |= magbits(un);
+      b[i] = canfdi_mla_hi_rnd(b[i], uo, gg);
+    }
+  }
+  blk_keep(col, j, acc, &ue, U_EMIN);
+  *col_e = (int16_t)ue;
+}
+
+/* theta += b k (k = e / a_n = km 2^(ke - 32), km in [2^30, 2^32)). Scaling:
+ * the block rises first when the update would exceed it (a block of zeros
+ * carries the lowest exponent, so it takes the update's format); then kept
+ * in format. Rounding half up. */
+static void rls_theta_update(canfdi_rls_t *r, const int32_t b[], int32_t eb, uint32_t km, int32_t ke, uint32_t kneg)
 {
   const unsigned n = r->cfg.n_params;
+  int32_t s = (r->theta_e - eb) - ke;
+  int32_t kk;
+  uint32_t acc = 0U;
+  unsigned i;
+  if (s < 1) {
+    blk_shr(r->theta, n, (unsigned)(1 - s));
+    r->theta_e += 1 - s;
+    s = 1;
+  }
+  kk = fix_mul(km, s, kneg);
+  for (i = 0U; i < n; i++) {
+    const int32_t t = canfdi_mla_hi_rnd(r->theta[i], b[i], kk);
+    r->theta[i] = t;
+    acc |= magbits(t);
+  }
+  blk_keep(r->theta, n, acc, &r->theta_e, CANFDI_RLS_THETA_EMIN);
+}
+
+/*
+ * Trace bound (P scaled through c0) and the exponent window of c0. An
+ * update cannot raise trace(P) by more than 1 / lambda (trace(P') <=
+ * trace(P) / lambda), so trb grows by that, and 2^-20 more for the
+ * rounding of the factors, per update; the exact trace is computed only
+ * when trb reaches trace_max.
+ */
+static void rls_bound(canfdi_rls_t *r)
+{
+  unsigned j;
+  r->trb = pf_mul(r->trb, r->trb_grow);
+  if (pf_lt(r->trace_max, r->trb)) {
+    const pf_t s = rls_trace_stored(r);
+    pf_t tr = pf_mul(s, r->c0);
+    if (pf_lt(r->trace_max, tr)) {
+      r->c0 = pf_mul(r->trace_max, pf_recip(s));
+      tr = pf_mul(s, r->c0);
+      canfdi_count_inc(&r->diag.trace_clips);
+    }
+    r->trb = tr;
+  }
+  if ((r->c0.e < C0_EMIN) || (r->c0.e > C0_EMAX)) {
+    const int32_t k = (r->c0.e < C0_EMIN) ? C0_SHIFT : -C0_SHIFT;
+    r->c0.e += k;
+    for (j = 0U; j < r->cfg.n_params; j++) {
+      r->d[j].e -= k;
+    }
+  }
+}
+
+/* The high word of the 64-bit product of two unsigned 32-bit numbers. */
+static inline __attribute__((always_inline)) uint32_t umulhi(uint32_t a, uint32_t b)
+{
+  return canfdi_umulhi32(a, b);
+}
+
+/* Column j's g = d_j f_j (normalised) and h = f_j / alpha_j (the high word
+ * of the mantissa product, >= 2^30), for the multipliers. */
+typedef struct {
+  uint32_t gm;
+  int32_t ge;
+  uint32_t hm;
+  int32_t he;
+} rls_gh_t;
+
+/*
+ * The scalar part of column j for f_j = fm 2^(fe - 32) (normalised, not 0):
+ * g and h into *o, then w = g h, rho = 1 / (1 + w) = alpha_j / alpha_(j+1),
+ * d_j *= rho (floored at 2^d_floor_e) and inv *= rho (inv = im 2^(ie - 32)
+ * = 1 / alpha_j). For w < 1 (the common case: v = 1 + w in [1, 2) needs no
+ * alignment) rho is a Q32 fraction from one division and one Newton step
+ * (2^-29 at worst, below 2^-31 on average); else v and rho are pf.
+ */
+static inline __attribute__((always_inline)) void rls_step(canfdi_rls_t *r, unsigned j, uint32_t fm, int32_t fe,
+                                                          uint32_t *im, int32_t *ie, int32_t d_floor_e, rls_gh_t *o)
+{
+  const pf_t dj = r->d[j];
+  pf_t dn;
+  uint32_t wh;
+  int32_t k;
+  {
+    const uint64_t pg = canfdi_umull32(dj.m, fm);
+    const uint32_t gh = (uint32_t)(pg >> 32);
+    const uint32_t sg = lz01(gh);
+    o->gm = (gh << sg) | (((uint32_t)pg >> 31) & sg);
+    o->ge = (dj.e + fe) - (int32_t)sg;
+  }
+  o->hm = umulhi(fm, *im);
+  o->he = fe + *ie;
+  wh = umulhi(o->gm, o->hm); /* w = wh 2^(ge + he - 32), wh >= 2^29 */
+  k = 1 - (o->ge + o->he);
+  if (k >= 1) {
+    const uint32_t v = 0x80000000U + ((k < 32) ? (wh >> (unsigned)k) : 0U);
+    uint32_t q = canfdi_recip_q63(v);
+    q = (q < 0x80000000U) ? 0x80000000U : q;
+    {
+      const uint64_t pd = canfdi_umull32(dj.m, q);
+      const uint32_t dh = (uint32_t)(pd >> 32);
+      const uint32_t sd = lz01(dh);
+      dn.m = (dh << sd) | (((uint32_t)pd >> 31) & sd);
+      dn.e = dj.e - (int32_t)sd;
+    }
+    {
+      const uint64_t pi = canfdi_umull32(*im, q);
+      const uint32_t ih = (uint32_t)(pi >> 32);
+      const uint32_t si = lz01(ih);
+      *im = (ih << si) | (((uint32_t)pi >> 31) & si);
+      *ie -= (int32_t)si;
+    }
+  } else {
+    const unsigned sw = canfdi_clz32(wh);
+    const pf_t one = {0x80000000U, 1};
+    const pf_t wf = {wh << sw, (o->ge + o->he) - (int32_t)sw};
+    const pf_t v = pf_add(one, wf);
+    const pf_t rho = pf_recip(v);
+    const pf_t inv = {*im, *ie};
+    const pf_t ni = pf_mul(inv, rho);
+    dn = pf_mul(dj, rho);
+    *im = ni.m;
+    *ie = ni.e;
+  }
+  if (dn.e < d_floor_e) {
+    dn.m = 0x80000000U;
+    dn.e = d_floor_e;
+    canfdi_count_inc(&r->diag.saturations);
+  }
+  r->d[j] = dn;
+}
+
+/* f from a 64-bit sum: |acc| < 7 2^60, not 0; fm normalised, *fe its
+ * exponent for acc 2^e; returns the sign as a mask. */
+static inline __attribute__((always_inline)) uint32_t rls_f(int64_t acc, int32_t e, uint32_t *fm, int32_t *fe)
+{
+  const uint32_t neg = (acc < 0) ? 0xFFFFFFFFU : 0U;
+  const uint64_t mag = (neg != 0U) ? ((uint64_t)(-(acc + 1)) + 1U) : (uint64_t)acc;
+  const uint32_t mh = (uint32_t)(mag >> 32);
+  if (mh != 0U) {
+    const unsigned sf = canfdi_clz32(mh); /* >= 1 */
+    *fm = (mh << sf) | ((uint32_t)mag >> (32U - sf));
+    *fe = (e + 64) - (int32_t)sf;
+  } else {
+    const unsigned sf = canfdi_clz32((uint32_t)mag);
+    *fm = (uint32_t)mag << sf;
+    *fe = (e + 32) - (int32_t)sf;
+  }
+  return neg;
+}
+
+/*
+ * One applied update on the regressor block x 2^ex (the error is in r), in
+ * one pass over the columns (Bierman's measurement update in ratio form).
+ * With alpha_0 = lambda / c0 and alpha_(j+1) = alpha_j + d_j f_j^2, the pass
+ * carries inv = 1 / alpha_j: per column j, f_j = x_j + sum_(i<j) u_ij x_i
+ * (one 64-bit sum: the products are below 2^60, x_j 2^-u_e below 2^60),
+ * g_j = d_j f_j (f's sign), h = f_j inv, w = g_j h = d_j f_j^2 / alpha_j,
+ * rho = 1 / (1 + w) = alpha_j / alpha_(j+1); then d_j *= rho, inv *= rho
+ * (rls_step), the column update (rls_column) and b_j = g_j, so that b ends
+ * as U g (in the block b[] 2^eb) and the gain is b / alpha_n = b inv. The
+ * scale c0 becomes c0 / lambda = 1 / alpha_0 (forgetting). Column 0 has no U
+ * entries: f_0 = x_0.
+ * Gain block: b_i = sum_(k >= i) u_ik g_k < n 2^(30 + max(u_e + g.e)),
+ * so eb = max(u_e + g.e) + ceil(log2 n) keeps it below 2^30; eb follows
+ * the maximum column by column (b[0..j-1] shifted down, rounded, when a
+ * column raises it). Column 0 counts with u_e = -30.
+ */
+static __attribute__((noinline)) void rls_apply(canfdi_rls_t *r, const int32_t x[], int32_t ex)
+{
+  const unsigned n = r->cfg.n_params;
+  const int32_t hd = (int32_t)r->clog2n;
+  int32_t b[NMAX];
+  int32_t eb = INT32_MIN;
+  const pf_t c0 = pf_mul(r->c0, r->inv_lambda); /* 1 / alpha_0, the new c0 */
+  const int32_t d_floor_e = -D_FLOOR_REL - c0.e;
+  uint32_t im = c0.m; /* inv = 1 / alpha_j */
+  int32_t ie = c0.e;
+  int32_t *col = r->u;
   unsigned i;
   unsigned j;
-  for (j = 0U; j < n; j++) {
-    const int32_t *col = &r->u[u_base(j)];
+  r->c0 = c0;
+  b[0] = 0;
+  if (x[0] != 0) {
+    rls_gh_t o;
+    uint32_t fm;
+    int32_t fe;
+    const uint32_t neg = rls_f(x[0], ex, &fm, &fe);
+    rls_step(r, 0U, fm, fe, &im, &ie, d_floor_e, &o);
+    eb = (o.ge + U_EMIN) + hd;
+    b[0] = fix_mul(o.gm, (32 + eb) - o.ge, neg);
+  }
+  for (j = 1U; j < n; j++) {
     const int32_t ue = (int32_t)r->u_e[j];
     int64_t acc;
     if (ue <= 0) {
-      acc = (int64_t)x[j] * (int64_t)((int32_t)1 << (unsigned)-ue); /* ue >= -30 */
+      acc = canfdi_smull32(x[j], (int32_t)1 << (unsigned)-ue); /* ue >= -30 */
     } else {
       acc = canfdi_asr64_rnd(x[j], (unsigned)ue);
     }
     for (i = 0U; i < j; i++) {
-      acc += (int64_t)col[i] * (int64_t)x[i];
+      acc += canfdi_smull32(col[i], x[i]);
     }
-    fneg[j] = (acc < 0);
-    f[j] = pf_from_u64(fneg[j] ? ((uint64_t)(-(acc + 1)) + 1U) : (uint64_t)acc, ue + ex);
-    g[j] = pf_mul(r->d[j], f[j]);
-    a[j + 1U] = pf_add(a[j], pf_mul(g[j], f[j]));
-  }
-}
-
-/*
- * Bierman's column pass: d_j *= a_j / a_(j+1); for i < j
- * u_ij += b_i mu_j (mu_j = -f_j / a_j) and b_i += u_ij g_j (old u_ij);
- * b_j = g_j. b ends as U g = P phi (stored scale), in the block b[] 2^eb.
- * Scaling and overflow: eb is chosen from a bound of |U g| so that every
- * partial sum stays below 2^29 and each multiplier is a rounded int32_t
- * below 2^30 (pf_to_fix with s >= 2); a column whose update would exceed
- * its format is shifted first (its exponent rises), then renormalised.
- * Rounding: half up in every product (canfdi_mla_hi_rnd).
- */
-static void rls_columns(canfdi_rls_t *r, const pf_t f[], const bool fneg[], const pf_t g[], const pf_t a[],
-                        const pf_t inv[], int32_t b[], int32_t eb)
-{
-  const unsigned n = r->cfg.n_params;
-  unsigned i;
-  unsigned j;
-  for (j = 0U; j < n; j++) {
-    pf_t dj;
-    if ((j > 0U) && (g[j].m != 0U)) {
-      int32_t *col = u_col(r, j);
-      const pf_t mu = pf_mul(f[j], inv[j]);
-      const int32_t s = (int32_t)r->u_e[j] - eb - 32 - mu.e;
-      const int32_t gg = pf_to_fix(g[j], eb - 32 - (int32_t)r->u_e[j] - g[j].e, fneg[j]);
-      if (s >= 2) {
-        const int32_t mm = pf_to_fix(mu, s, !fneg[j]);
-        for (i = 0U; i < j; i++) {
-          const int32_t uo = col[i];
-          col[i] = canfdi_mla_hi_rnd(uo, b[i], mm);
-          b[i] = canfdi_mla_hi_rnd(b[i], uo, gg);
-        }
+    b[j] = 0;
+    if (acc != 0) {
+      rls_gh_t o;
+      uint32_t fm;
+      int32_t fe;
+      const uint32_t neg = rls_f(acc, ue + ex, &fm, &fe);
+      int32_t c;
+      rls_step(r, j, fm, fe, &im, &ie, d_floor_e, &o);
+      c = (ue + o.ge) + hd;
+      if (eb == INT32_MIN) {
+        eb = c;
+      } else if (c > eb) {
+        blk_shr(b, j, (unsigned)(c - eb));
+        eb = c;
       } else {
-        /* the column outgrows its format: b first (old format), then the
-         * column shifted so that the multiplier fits (s = 2) */
-        int32_t bo[NMAX];
-        int32_t mm;
-        for (i = 0U; i < j; i++) {
-          bo[i] = b[i];
-          b[i] = canfdi_mla_hi_rnd(b[i], col[i], gg);
-        }
-        blk_shr(col, j, (unsigned)(2 - s));
-        r->u_e[j] = (int16_t)(r->u_e[j] + (2 - s));
-        mm = pf_to_fix(mu, 2, !fneg[j]);
-        for (i = 0U; i < j; i++) {
-          col[i] = canfdi_mla_hi_rnd(col[i], bo[i], mm);
-        }
+        /* the block holds it */
       }
-      u_col_norm(r, j);
+      rls_column(col, j, &r->u_e[j], o.hm, o.he, o.gm, o.ge, neg, b, eb);
+      b[j] = fix_mul(o.gm, (32 + eb) - o.ge, neg);
     }
-    b[j] = (g[j].m != 0U) ? pf_to_fix(g[j], eb - g[j].e, fneg[j]) : 0;
-    dj = pf_mul(pf_mul(r->d[j], a[j]), inv[j + 1U]);
-    {
-      pf_t fl = a[0];
-      fl.e -= D_FLOOR_REL;
-      if (pf_lt(dj, fl)) {
-        dj = fl;
-        canfdi_count_inc(&r->diag.saturations);
-      }
-    }
-    r->d[j] = dj;
+    col = &col[j];
   }
-}
-
-/* theta += b k (k = e / a_n). Scaling: the block rises first when the
- * update would exceed it; then renormalised. Rounding half up. */
-static void rls_theta_update(canfdi_rls_t *r, const int32_t b[], int32_t eb, pf_t k, bool kneg)
-{
-  const unsigned n = r->cfg.n_params;
-  unsigned i;
-  if (k.m != 0U) {
-    int32_t s = r->theta_e - eb - 32 - k.e;
-    int32_t kk;
-    uint32_t any = 0U;
-    for (i = 0U; i < n; i++) {
-      any |= mag32(r->theta[i]);
-    }
-    if (any == 0U) {
-      /* a block of zeros takes the update's format */
-      r->theta_e -= s - 2;
-      s = 2;
-    } else if (s < 2) {
-      blk_shr(r->theta, n, (unsigned)(2 - s));
-      r->theta_e += 2 - s;
-      s = 2;
-    }
-    kk = pf_to_fix(k, s, kneg);
-    for (i = 0U; i < n; i++) {
-      r->theta[i] = canfdi_mla_hi_rnd(r->theta[i], b[i], kk);
-    }
-    blk_norm(r->theta, n, &r->theta_e, CANFDI_RLS_THETA_EMIN);
+  if ((r->err.m != 0U) && (eb != INT32_MIN)) {
+    rls_theta_update(r, b, eb, umulhi(r->err.m, im), r->err.e + ie, r->err_neg ? 0xFFFFFFFFU : 0U);
   }
-}
-
-/* Trace bound (P scaled through a0) and the exponent window of a0. */
-static void rls_bound(canfdi_rls_t *r)
-{
-  const pf_t lim = pf_mul(r->trace_max, r->a0);
-  unsigned j;
-  if (rls_trace_bound_exp(r) > (lim.e + 31)) {
-    const pf_t tr = rls_trace_stored(r);
-    if (pf_lt(lim, tr)) {
-      r->a0 = pf_mul(tr, r->inv_trace_max);
-      canfdi_count_inc(&r->diag.trace_clips);
-    }
-  }
-  if ((r->a0.e < A0_EMIN) || (r->a0.e > A0_EMAX)) {
-    const int32_t k = (r->a0.e < A0_EMIN) ? A0_SHIFT : -A0_SHIFT;
-    r->a0.e += k;
-    for (j = 0U; j < r->cfg.n_params; j++) {
-      r->d[j].e += k;
-    }
-  }
-}
-
-/* One applied update on the regressor block x 2^ex (the error is in r). */
-static void rls_apply(canfdi_rls_t *r, const int32_t x[], int32_t ex)
-{
-  const unsigned n = r->cfg.n_params;
-  pf_t f[NMAX];
-  pf_t g[NMAX];
-  pf_t a[NMAX + 1U];
-  pf_t inv[NMAX + 1U];
-  bool fneg[NMAX];
-  int32_t b[NMAX];
-  int32_t eb = INT32_MIN;
-  unsigned j;
-  a[0] = pf_mul(r->a0, r->lambda); /* forgetting: P / lambda */
-  rls_forward(r, x, ex, f, fneg, g, a);
-  rls_inverses(a, inv, n);
-  for (j = 0U; j < n; j++) {
-    if (g[j].m != 0U) {
-      const int32_t c = (int32_t)r->u_e[j] + g[j].e;
-      eb = (c > eb) ? c : eb;
-    }
-  }
-  eb = (eb == INT32_MIN) ? 0 : (eb + 33 + (int32_t)r->clog2n);
-  rls_columns(r, f, fneg, g, a, inv, b, eb);
-  rls_theta_update(r, b, eb, pf_mul(r->err, inv[n]), r->err_neg);
-  r->a0 = a[0];
   rls_bound(r);
 }
 
 bool canfdi_rls_update(canfdi_rls_t *r, const int32_t phi_q16[], int32_t y_q16)
 {
   int32_t x[NMAX];
+  int64_t xt;
   int32_t ex;
+  bool xfix;
   bool go;
   CANFDI_ASSERT((r != NULL) && (phi_q16 != NULL));
-  go = rls_gate(r, phi_q16);
-  rls_phi_block(r, phi_q16, x, &ex);
-  r->err = rls_error(r, x, ex, y_q16, &r->err_neg);
+  CANFDI_ASSERT((r->cfg.n_params >= 1U) && (r->cfg.n_params <= NMAX) && ((rls_gate_mask(r) >> r->cfg.n_params) == 0U));
+  ex = rls_block(r, phi_q16, x, &xt, &xfix);
+  go = rls_gate(r, phi_q16, x, xfix);
+  rls_error(r, xt, ex, y_q16);
   r->excited = go;
   if (go) {
     rls_apply(r, x, ex);
@@ -866,8 +998,12 @@ void canfdi_rls_set_theta_qn(canfdi_rls_t *r, unsigned i, int32_t value, unsigne
       } else {
         r->theta[i] = canfdi_asr32_rnd(value, (unsigned)-sh);
       }
+    } else if (others == 0U) {
+      r->theta_e = CANFDI_RLS_THETA_EMIN; /* a block of zeros */
+    } else {
+      /* the others keep the format */
     }
-    blk_norm(r->theta, n, &r->theta_e, CANFDI_RLS_THETA_EMIN);
+    blk_fit(r->theta, n, blk_bits(r->theta, n), &r->theta_e, CANFDI_RLS_THETA_EMIN);
   }
 }
 
@@ -880,18 +1016,12 @@ int32_t canfdi_rls_err_q16(const canfdi_rls_t *r)
   return xf_to_s32(e, 16);
 }
 
-/* 1 / a0 as an xf: the factor from the stored factors to P. */
-static xf_t rls_inv_a0(const canfdi_rls_t *r)
-{
-  return xf_from_pf(pf_recip(r->a0), false);
-}
-
 int32_t canfdi_rls_cov_qn(const canfdi_rls_t *r, unsigned i, unsigned j, unsigned frac)
 {
   int32_t y = 0;
   CANFDI_ASSERT(r != NULL);
   if ((i < r->cfg.n_params) && (j < r->cfg.n_params) && (frac <= 31U)) {
-    /* P_ij = sum_{k >= max(i,j)} u_ik d_k u_jk / a0, u_kk = 1 */
+    /* P_ij = sum_{k >= max(i,j)} u_ik d_k u_jk c0, u_kk = 1 */
     const unsigned k0 = (i > j) ? i : j;
     const xf_t one = xf_make(1, 0);
     xf_t s = {0, 0};
@@ -901,7 +1031,7 @@ int32_t canfdi_rls_cov_qn(const canfdi_rls_t *r, unsigned i, unsigned j, unsigne
       const xf_t ujk = (j == k) ? one : xf_make(r->u[u_idx(j, k)], r->u_e[k]);
       s = xf_add(s, xf_mul(xf_mul(uik, ujk), xf_from_pf(r->d[k], false)));
     }
-    y = xf_to_s32(xf_mul(s, rls_inv_a0(r)), (int32_t)frac);
+    y = xf_to_s32(xf_mul(s, xf_from_pf(r->c0, false)), (int32_t)frac);
   }
   return y;
 }
@@ -909,7 +1039,7 @@ int32_t canfdi_rls_cov_qn(const canfdi_rls_t *r, unsigned i, unsigned j, unsigne
 int32_t canfdi_rls_trace_q16(const canfdi_rls_t *r)
 {
   CANFDI_ASSERT(r != NULL);
-  return xf_to_s32(xf_mul(xf_from_pf(rls_trace_stored(r), false), rls_inv_a0(r)), 16);
+  return xf_to_s32(xf_mul(xf_from_pf(rls_trace_stored(r), false), xf_from_pf(r->c0, false)), 16);
 }
 
 canfdi_rls_xf_t canfdi_rls_d(const canfdi_rls_t *r, unsigned j)
@@ -917,7 +1047,7 @@ canfdi_rls_xf_t canfdi_rls_d(const canfdi_rls_t *r, unsigned j)
   xf_t z = {0, 0};
   CANFDI_ASSERT(r != NULL);
   if (j < r->cfg.n_params) {
-    z = xf_mul(xf_from_pf(r->d[j], false), rls_inv_a0(r));
+    z = xf_mul(xf_from_pf(r->d[j], false), xf_from_pf(r->c0, false));
   }
   return z;
 }
@@ -926,8 +1056,8 @@ int32_t canfdi_rls_excitation_q16(const canfdi_rls_t *r)
 {
   int64_t m;
   CANFDI_ASSERT(r != NULL);
-  m = rls_excitation_q48(r);
-  return (m == INT64_MAX) ? 0 : (int32_t)canfdi_asr64_rnd(m, 32U); /* < 2^30 */
+  m = rls_excitation_q46(r);
+  return (m == INT64_MAX) ? 0 : (int32_t)canfdi_asr64_rnd(m, 30U); /* <= 2^30 */
 }
 
 bool canfdi_rls_excited(const canfdi_rls_t *r)
@@ -952,13 +1082,12 @@ bool canfdi_rls_invariants_hold(const canfdi_rls_t *r)
   if (ok) {
     const unsigned n = r->cfg.n_params;
     unsigned j;
-    pf_t lim = pf_mul(r->trace_max, r->a0);
-    lim = pf_add(lim, pf_make(lim.m, lim.e - 20));
-    ok = (r->a0.m >= 0x80000000U) && blk_ok(r->theta, n);
+    const pf_t lim = pf_add(r->trace_max, pf_make(r->trace_max.m, r->trace_max.e - 52)); /* (1 + 2^-20) */
+    ok = (r->c0.m >= 0x80000000U) && blk_ok(r->theta, n);
     for (j = 0U; j < n; j++) {
       ok = ok && (r->d[j].m >= 0x80000000U) && (r->u_e[j] >= U_EMIN) && blk_ok(&r->u[u_base(j)], j);
     }
-    ok = ok && !pf_lt(lim, rls_trace_stored(r));
+    ok = ok && !pf_lt(lim, pf_mul(rls_trace_stored(r), r->c0));
   }
   return ok;
 }

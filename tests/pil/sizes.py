@@ -3,7 +3,7 @@
 checked against the Cortex-M build (`make size-check`, mk/pil.mk).
 
 A header's contract includes the memory its state takes ("Memory:
-sizeof(canfdi_rls_t) = 368 bytes on a 32-bit target"); a firmware engineer
+sizeof(canfdi_rls_t) = 352 bytes on a 32-bit target"); a firmware engineer
 sizes RAM from those lines, so a struct that grows must not leave them
 behind. Every statement `sizeof(canfdi_..._t) = N` (N a plain number, digits
 grouped by spaces allowed; a formula such as `32 + 20 * ...` is not

@@ -95,6 +95,13 @@ static void guard_fixp(void)
   sink32((int32_t)canfdi_clz32(in_u32));
   sink32((int32_t)canfdi_clz64(in_u64));
   sink32(canfdi_mla_hi_rnd(a, b, c));
+  sinku64(canfdi_umull32(in_u32, (uint32_t)b));
+  sink32((int32_t)canfdi_umulhi32(in_u32, (uint32_t)b));
+  sink64(canfdi_smull32(a, b));
+  sink32((int32_t)canfdi_recip_q63(in_u32 | 0x80000000U));
+  sinku64(canfdi_umull32_h16(in_u32, (uint32_t)b));
+  sink32((int32_t)canfdi_umulhi32_h16(in_u32, (uint32_t)b));
+  sink64(canfdi_smull32_h16(a, b));
   sink32(canfdi_clamp_s32(a, b, c));
   sink32(canfdi_asr32(a, n));
   sink64(canfdi_asr64(a64, n));

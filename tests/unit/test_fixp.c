@@ -1011,6 +1011,85 @@ START_TEST(test_intrin)
   ck_assert_int_eq(canfdi_mla_hi_rnd(5, INT32_MIN, INT32_MIN), 5 + (1 << 30));
   ck_assert_int_eq(canfdi_mla_hi_rnd(-7, INT32_MAX, INT32_MIN), -7 - (1 << 30) + 1);
   ck_assert_int_eq(canfdi_mla_hi_rnd(0, -3, 1 << 30), -1); /* -0.75 -> -1 */
+  /* the 32x32->64 products on edge values (every sign combination) */
+  {
+    static const uint32_t ue[] = {0U, 1U, 0xFFFFU, 0x10000U, 0x7FFFFFFFU, 0x80000000U, 0xFFFFFFFFU, 0x12345678U};
+    unsigned i;
+    unsigned j;
+    for (i = 0U; i < sizeof ue / sizeof ue[0]; i++) {
+      for (j = 0U; j < sizeof ue / sizeof ue[0]; j++) {
+        const uint64_t p = (uint64_t)ue[i] * (uint64_t)ue[j];
+        const int64_t sp = (int64_t)canfdi_wrap_u32_to_s32(ue[i]) * (int64_t)canfdi_wrap_u32_to_s32(ue[j]);
+        ck_assert_uint_eq(canfdi_umull32(ue[i], ue[j]), p);
+        ck_assert_uint_eq(canfdi_umull32_h16(ue[i], ue[j]), p);
+        ck_assert_uint_eq(canfdi_umulhi32_h16(ue[i], ue[j]), (uint32_t)(p >> 32));
+        ck_assert(canfdi_smull32_h16(canfdi_wrap_u32_to_s32(ue[i]), canfdi_wrap_u32_to_s32(ue[j])) == sp);
+        ck_assert_uint_eq(canfdi_umulhi32(ue[i], ue[j]), (uint32_t)(p >> 32));
+        ck_assert(canfdi_smull32(canfdi_wrap_u32_to_s32(ue[i]), canfdi_wrap_u32_to_s32(ue[j])) == sp);
+      }
+    }
+  }
+}
+END_TEST
+
+/* The 16-bit-halves products (ARMv6-M's) against the host's 64-bit
+ * products on a pseudo-random sweep. */
+START_TEST(test_mul_halves)
+{
+  uint32_t s = 0x2545F491U;
+  unsigned k;
+  for (k = 0U; k < 20000U; k++) {
+    uint32_t a;
+    uint32_t b;
+    s ^= s << 13;
+    s ^= s >> 17;
+    s ^= s << 5;
+    a = s;
+    s ^= s << 13;
+    s ^= s >> 17;
+    s ^= s << 5;
+    b = s;
+    ck_assert_uint_eq(canfdi_umull32_h16(a, b), (uint64_t)a * (uint64_t)b);
+    ck_assert_uint_eq(canfdi_umulhi32_h16(a, b), (uint32_t)(((uint64_t)a * (uint64_t)b) >> 32));
+    ck_assert(canfdi_smull32_h16(canfdi_wrap_u32_to_s32(a), canfdi_wrap_u32_to_s32(b)) ==
+              (int64_t)canfdi_wrap_u32_to_s32(a) * (int64_t)canfdi_wrap_u32_to_s32(b));
+  }
+}
+END_TEST
+
+/* canfdi_recip_q63: 2^63 / v from below, within 2^-30.4 (here: v q <= 2^63
+ * and 2^63 - v q < 4 v, i.e. q within 4 units of the floor), below 2^32,
+ * on every interval boundary of its seed table and on a sweep. */
+START_TEST(test_recip_q63)
+{
+  const uint64_t one = (uint64_t)1 << 63;
+  uint32_t worst = 0U;
+  uint32_t k;
+  for (k = 0U; k < 256U; k++) {
+    const uint32_t base = 0x80000000U + (k << 23);
+    const uint32_t vs[5] = {base, base + 1U, base + 0x7FFFFFU, base + 0x400000U, base + 0x40007FU};
+    unsigned i;
+    for (i = 0U; i < 5U; i++) {
+      const uint32_t v = vs[i];
+      const uint32_t q = canfdi_recip_q63(v);
+      const uint64_t vq = (uint64_t)v * (uint64_t)q;
+      ck_assert(vq <= one);
+      ck_assert((one - vq) < (uint64_t)4U * v);
+    }
+  }
+  for (k = 0U; k < 100000U; k++) {
+    const uint32_t v = 0x80000000U + (k * 21473U) + (k >> 3);
+    const uint32_t q = canfdi_recip_q63(v);
+    const uint64_t vq = (uint64_t)v * (uint64_t)q;
+    const uint32_t units = (uint32_t)((one - vq) / v);
+    if (vq > one) {
+      ck_abort_msg("v %u: q %u above 2^63 / v", v, q);
+    }
+    worst = (units > worst) ? units : worst;
+  }
+  ck_assert_uint_lt(worst, 4U);
+  ck_assert_uint_eq(canfdi_recip_q63(0xFFFFFFFFU) >> 30, 1U); /* 2^31 - 1 or 2^31 */
+  ck_assert_uint_eq(canfdi_recip_q63(0x80000000U) >> 31, 1U); /* just below 2^32 */
 }
 END_TEST
 
@@ -1024,6 +1103,8 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_asr64, 0, N_SHIFT_GROUPS);
   tcase_add_test(tc, test_round_ties);
   tcase_add_test(tc, test_intrin);
+  tcase_add_test(tc, test_recip_q63);
+  tcase_add_test(tc, test_mul_halves);
   tcase_add_loop_test(tc, test_shl, 0, N_SHIFT_GROUPS);
   suite_add_tcase(s, tc);
 

@@ -22,8 +22,15 @@
  *   - badly scaled regressors (normalised sizes from 2^-6 to 2^6, i.e. the
  *     caller's shifts off by up to 2^6 either way) still follow the double
  *     twin to the same tolerances;
- *   - 200 000 excited updates (the scale a0 crosses its exponent window
- *     ~20 times) keep the invariants and the twin's theta and P.
+ *   - 200 000 excited updates (the scale c0 crosses its exponent window
+ *     ~20 times) keep the invariants and the twin's theta and P;
+ *   - the regressor block's fixed format and its dynamic fallback (shifts
+ *     outside -20..10, normalised regressors beyond 16, the format
+ *     changing from update to update) follow the twin alike;
+ *   - the excitation measure reads the mean-square deviation of a square
+ *     wave in either format, and the clip at 128^2;
+ *   - 10^6 updates of a constant, noise-free regressor: with the gate
+ *     nothing changes, without it the (tracked) trace bound holds.
  */
 #include <check.h>
 #include <math.h>
@@ -690,6 +697,191 @@ START_TEST(test_long_run)
 }
 END_TEST
 
+/* ---- the regressor block's two formats ---------------------------------- */
+
+/* The block takes a fixed format (x = phi_q16 2^(10 - s)) when every shift
+ * is in -20..10 and every |phi_norm| < 16, else a dynamic block exponent.
+ * _i == 0: shifts 12 (outside the fixed range); _i == 1: shifts 0 with
+ * normalised regressors up to +-40 on two of them; _i == 2: the regressors
+ * alternate between +-40 and +-0.5 every 10 updates (the format changes
+ * from update to update). The double twin must be followed to the twin
+ * test's tolerances in each case. */
+START_TEST(test_block_formats)
+{
+  const int mode = _i;
+  canfdi_rls_cfg_t c;
+  canfdi_rls_t r;
+  dbl_rls_t d;
+  const double th[3] = {0.8, -1.7, 0.45};
+  double worst_th = 0.0;
+  double worst_p = 0.0;
+  int k;
+  int i;
+  int j;
+  rng_seed(300U + (uint64_t)mode);
+  base_cfg(&c, 3);
+  for (i = 0; i < 3; i++) {
+    c.phi_shift[i] = (int8_t)((mode == 0) ? 12 : 0);
+  }
+  c.y_shift = (int8_t)((mode == 0) ? 12 : 4);
+  c.forget_q31 = CANFDI_Q31_RATIO(2, 100);
+  c.trace_max_q16 = 20000 * 65536;
+  ck_assert_int_eq(canfdi_rls_init(&r, &c), CANFDI_OK);
+  memset(&d, 0, sizeof d);
+  d.n = 3;
+  d.lam = 1.0 - (double)c.forget_q31 / 2147483648.0;
+  for (i = 0; i < 3; i++) {
+    d.p[i][i] = (double)c.p0_q16 / Q16;
+  }
+  for (k = 0; k < 3000; k++) {
+    int32_t phi[3];
+    double phin[3];
+    double y = 0.0;
+    int32_t yq;
+    for (i = 0; i < 3; i++) {
+      double a = 1.0;
+      if (mode == 1) {
+        a = (i == 2) ? 1.0 : 40.0;
+      } else if (mode == 2) {
+        a = (((k / 10) % 2) == 0) ? 40.0 : 0.5;
+      } else {
+        a = 1.0;
+      }
+      phi[i] = q16(ldexp(a * (2.0 * rng_u() - 1.0), c.phi_shift[i]));
+      phin[i] = ldexp((double)phi[i] / Q16, -c.phi_shift[i]);
+      y += th[i] * ldexp(phin[i], c.y_shift);
+    }
+    yq = q16(y + ldexp(0.01 * rng_n(), c.y_shift));
+    (void)canfdi_rls_update(&r, phi, yq);
+    dbl_update(&d, phin, ldexp((double)yq / Q16, -c.y_shift));
+    CHECK(canfdi_rls_invariants_hold(&r));
+    if ((k % 50) == 49) {
+      for (i = 0; i < 3; i++) {
+        const double tp = ldexp(d.th[i], c.y_shift - c.phi_shift[i]);
+        worst_th = fmax(worst_th, fabs(theta_phys(&r, i) - tp) / fmax(1.0, fabs(tp)));
+        for (j = 0; j < 3; j++) {
+          const double sc2 = sqrt(d.p[i][i] * d.p[j][j]);
+          const int fr = (int)fmin(31.0, fmax(0.0, 29.0 - ceil(log2(sc2))));
+          const double pf = ldexp((double)canfdi_rls_cov_qn(&r, (unsigned)i, (unsigned)j, (unsigned)fr), -fr);
+          worst_p = fmax(worst_p, fabs(pf - d.p[i][j]) / fmax(1e-3, sc2));
+        }
+      }
+    }
+  }
+  SHOW("rls block format %d: max |theta - theta_double| %.3g (rel), max |P - P_double| %.3g (rel)\n", mode,
+       worst_th, worst_p);
+  CHECK(worst_th <= 1e-5);
+  CHECK(worst_p <= 1e-4);
+}
+END_TEST
+
+/* ---- the excitation measure --------------------------------------------- */
+
+/* A square wave +-A (normalised) against its running mean (time constant
+ * 2^k updates, a = 2^-k): the mean settles to +-a A / (2 - a) just before
+ * each sample, so the deviation is 2 A / (2 - a) and the measure must read
+ * its square (Q16.16, after the filters have settled), for A = 0.25 and 4
+ * (fixed block format) and A = 100 (dynamic format: beyond 16 normalised);
+ * an amplitude of 1000 normalised reads as the clip, 128^2 = 2^14. */
+START_TEST(test_excitation_measure)
+{
+  static const double amp[4] = {0.25, 4.0, 100.0, 1000.0};
+  static const int sh[4] = {0, 0, 5, 0};
+  const double a = amp[_i];
+  const double dev = 2.0 * a / (2.0 - 1.0 / 16.0);
+  const double want = (_i == 3) ? 16384.0 : dev * dev;
+  canfdi_rls_cfg_t c;
+  canfdi_rls_t r;
+  int k;
+  base_cfg(&c, 2);
+  c.phi_shift[0] = (int8_t)sh[_i];
+  c.phi_shift[1] = (int8_t)sh[_i];
+  c.excite_mask = 0x1U;
+  c.excite_shift = 4U;
+  c.excite_min_q16 = 0;
+  ck_assert_int_eq(canfdi_rls_init(&r, &c), CANFDI_OK);
+  for (k = 0; k < 2000; k++) {
+    const double v = ((k % 2) == 0) ? a : -a;
+    int32_t phi[2];
+    phi[0] = q16(ldexp(v, sh[_i]));
+    phi[1] = q16(ldexp(0.5, sh[_i]));
+    (void)canfdi_rls_update(&r, phi, q16(0.1 * v));
+  }
+  {
+    const double got = (double)canfdi_rls_excitation_q16(&r) / Q16;
+    SHOW("rls excitation of a square wave +-%g: %.6g (expected %.6g)\n", a, got, want);
+    CHECK(fabs(got - want) <= 1e-4 * want + 2.0 / Q16);
+  }
+}
+END_TEST
+
+/* ---- a long run without excitation ---------------------------------------- */
+
+/* 10^6 updates (17 minutes at 1 kHz) of one constant, noise-free regressor
+ * vector after a converged start, without the gate and with slow
+ * forgetting: the trace bound (tracked, not recomputed every update) must
+ * hold at every check, D stay positive, the factorisation valid, and the
+ * estimate still predict along the constant direction. With the gate, the
+ * same run leaves theta and P bit for bit unchanged. */
+START_TEST(test_long_no_excitation)
+{
+  const bool gate = (_i == 0);
+  canfdi_rls_cfg_t c;
+  canfdi_rls_t r;
+  const double th[3] = {0.6, 1.4, -0.9};
+  const int32_t phi_c[3] = {q16(0.25), q16(-0.6), q16(0.9)};
+  int32_t th0[3];
+  int32_t cov0;
+  int32_t trmax_seen = 0;
+  long k;
+  int i;
+  rng_seed(41U);
+  base_cfg(&c, 3);
+  c.forget_q31 = CANFDI_Q31_RATIO(1, 1000);
+  c.trace_max_q16 = 500 * 65536;
+  c.excite_min_q16 = gate ? (int32_t)(1e-3 * Q16) : 0;
+  ck_assert_int_eq(canfdi_rls_init(&r, &c), CANFDI_OK);
+  for (k = 0; k < 5000; k++) {
+    int32_t phi[3];
+    gen_phi(3, &c, phi);
+    (void)canfdi_rls_update(&r, phi, q16(dot_phys(3, th, phi) + 0.01 * rng_n()));
+  }
+  for (k = 0; k < 1000; k++) {
+    (void)canfdi_rls_update(&r, phi_c, q16(dot_phys(3, th, phi_c)));
+  }
+  for (i = 0; i < 3; i++) {
+    th0[i] = canfdi_rls_theta_qn(&r, (unsigned)i, 20U);
+  }
+  cov0 = canfdi_rls_cov_qn(&r, 0U, 2U, 24U);
+  for (k = 0; k < 1000000L; k++) {
+    (void)canfdi_rls_update(&r, phi_c, q16(dot_phys(3, th, phi_c)));
+    if ((k % 10000) == 9999) {
+      const int32_t t = canfdi_rls_trace_q16(&r);
+      CHECK(canfdi_rls_invariants_hold(&r));
+      trmax_seen = (t > trmax_seen) ? t : trmax_seen;
+    }
+  }
+  SHOW("rls 10^6 updates without excitation (%s): max trace %.6g (bound %.6g), clips %u, skipped %u\n",
+       gate ? "gate" : "no gate", (double)trmax_seen / Q16, (double)c.trace_max_q16 / Q16,
+       canfdi_rls_diag(&r)->trace_clips, canfdi_rls_diag(&r)->skipped);
+  CHECK((int64_t)trmax_seen <= (int64_t)c.trace_max_q16 + (c.trace_max_q16 >> 19));
+  if (gate) {
+    ck_assert_uint_ge(canfdi_rls_diag(&r)->skipped, 1000000U);
+    for (i = 0; i < 3; i++) {
+      ck_assert_int_eq(canfdi_rls_theta_qn(&r, (unsigned)i, 20U), th0[i]);
+    }
+    ck_assert_int_eq(canfdi_rls_cov_qn(&r, 0U, 2U, 24U), cov0);
+  } else {
+    double pred = 0.0;
+    ck_assert_uint_gt(canfdi_rls_diag(&r)->trace_clips, 0U);
+    for (i = 0; i < 3; i++) {
+      pred += theta_phys(&r, i) * (double)phi_c[i] / Q16;
+    }
+    CHECK(fabs(pred - dot_phys(3, th, phi_c)) < 1e-3);
+  }
+}
+END_TEST
+
 START_TEST(test_readout)
 {
   canfdi_rls_cfg_t c;
@@ -724,6 +916,8 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_shift_invariance);
   tcase_add_test(tc, test_collinear);
   tcase_add_test(tc, test_bad_scaling);
+  tcase_add_loop_test(tc, test_block_formats, 0, 3);
+  tcase_add_loop_test(tc, test_excitation_measure, 0, 4);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("robustness");
@@ -732,6 +926,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_tracking);
   tcase_add_test(tc, test_reset);
   tcase_add_test(tc, test_long_run);
+  tcase_add_loop_test(tc, test_long_no_excitation, 0, 2);
   suite_add_tcase(s, tc);
   return s;
 }
