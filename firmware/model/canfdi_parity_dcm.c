@@ -5,6 +5,7 @@
 #include "model/canfdi_parity_dcm.h"
 
 #include "core/canfdi_count.h"
+#include "core/canfdi_intrin.h"
 #include "core/canfdi_qconst.h"
 
 /* Fraction bits of the residual accumulator (Q23.40 in int64_t). */
@@ -119,7 +120,7 @@ static canfdi_parity_dcm_coef_t pdcm_coef_q24(int32_t x_q24)
  */
 static int64_t pdcm_mac(int64_t acc, canfdi_parity_dcm_coef_t c, int32_t x, unsigned fx, bool sub)
 {
-  const int64_t p = (int64_t)c.m * (int64_t)x;
+  const int64_t p = canfdi_smull32(c.m, x); /* SMULL; ARMv6-M: 16-bit halves */
   const int32_t s = (int32_t)c.f + (int32_t)fx - (int32_t)PDCM_ACC_FRAC;
   int64_t t;
   if ((s >= 1) && (s <= 31)) {

@@ -5,6 +5,7 @@
 
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_intrin.h"
 
 /* h = wc T / 2 = wc * STEP_US / 2e6. */
 #define SVF_H_DEN 2000000U
@@ -134,16 +135,20 @@ void canfdi_svf_reset(canfdi_svf_t *f, int32_t x0_q16)
  * without its saturation, which cannot act in this range (|result| < 2^56).
  * a = ah 2^32 + al (ah the floor, al in [0, 2^32)): 2 ah g is exact and
  * adding it does not change the rounding of al g / 2^31.
- * Cost: SMULL and a 32x32->64 product with a sign fix on ARMv7-M; inline,
- * as a call costs more than the work.
+ * Cost: SMULL and UMULL with a sign fix on ARMv7-M, their 16-bit halves
+ * on ARMv6-M (core/canfdi_intrin.h; libgcc's 64x64 multiply costs about
+ * twice as much); inline, as a call costs more than the work.
  */
 static inline __attribute__((always_inline)) int64_t svf_mul_q31(int64_t a, int32_t g)
 {
   /* the high word read as signed is floor(a / 2^32): |ah| < 2^24 */
   const int32_t ah = canfdi_wrap_u32_to_s32((uint32_t)((uint64_t)a >> 32));
   const uint32_t al = (uint32_t)((uint64_t)a & 0xFFFFFFFFU);
-  const int64_t hi = (int64_t)ah * (int64_t)g;      /* |hi| < 2^55 */
-  const int64_t lo = canfdi_asr64_rnd((int64_t)al * (int64_t)g, 31U);
+  const int64_t hi = canfdi_smull32(ah, g); /* |hi| < 2^55 */
+  /* al g with al unsigned: the unsigned product less al 2^32 for a
+   * negative g (exact; |al g| < 2^63) */
+  const uint64_t alg = canfdi_umull32(al, (uint32_t)g) - ((g < 0) ? ((uint64_t)al << 32) : 0U);
+  const int64_t lo = canfdi_asr64_rnd(canfdi_wrap_u64_to_s64(alg), 31U);
   return (2 * hi) + lo;
 }
 
