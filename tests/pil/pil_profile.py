@@ -167,7 +167,7 @@ def main():
         if os.path.exists(a.json):
             with open(a.json) as f:
                 doc = json.load(f)
-        doc[a.name or os.path.basename(a.run_dir.rstrip("/")) + ":" + a.machine] = res
+        doc[(a.name or os.path.basename(a.run_dir.rstrip("/"))) + ":" + a.machine] = res
         with open(a.json, "w") as f:
             json.dump(doc, f, indent=1)
 
