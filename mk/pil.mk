@@ -117,8 +117,8 @@ BENCH_STEPS += bench-pil-profile
 # PIL_COST_BOUND_<machine>. Fails when a step costs more; figures in
 # $(BUILD)/bench/pil_cost.json.
 PIL_COST_MACHINES := m4 m0
-PIL_COST_BOUND_m4 := 50000
-PIL_COST_BOUND_m0 := 110000
+PIL_COST_BOUND_m4 := 38000
+PIL_COST_BOUND_m0 := 85000
 PIL_COST_FOUND ?= 300
 PIL_COST_ELFS := $(foreach m,$(PIL_COST_MACHINES),$(PIL_DIR)/pil_cost_$(m).elf)
 PIL_EXPORT := $(PIL_DIR)/fuzz-export-app-rx

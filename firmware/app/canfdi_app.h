@@ -111,27 +111,36 @@
  *
  * Cost per canfdi_app_step, executed instructions measured on QEMU with
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
- * build/bench/pil.json): the 24 000 steps of the SIL demo on the M3/M4, the
- * PIL scenarios on the M0 (microbit, real ARMv6-M):
+ * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      26 800   36 300   42 900
- *   Cortex-M4 (an386)      26 800   36 300   42 800
- *   Cortex-M0 (microbit)   ~50 000  ~78 000  ~92 000
- * The model layer dominates (SVFs every step, RLS updates decimated inside
- * the modules). A 1 ms step needs a Cortex-M4 of roughly 60 MHz or more
- * with margin; on a Cortex-M0 at 48 MHz it does not fit. Host (x86-64,
- * gcc -O2, callgrind): `make sil-bench`. The same run shows the ECU's
- * frames bit-identical between the host build and both target builds.
- * With a tester's requests in flight (`make pil-test`, the SIL log of
- * tests/sil/scenarios/uds_workshop.scn): at most 39 938 (M4) / 84 096 (M0)
- * in those steps, within the same run's maxima (42 083 / 86 851).
- * Stated worst case, whatever the step receives: 50 000 instructions on
- * the M4, 110 000 on the M0 (the PIL scenarios' maxima, 44 943 / 96 694,
+ *   Cortex-M3 (an385)      22 200   24 400   30 300
+ *   Cortex-M4 (an386)      22 200   24 300   30 300
+ *   Cortex-M0 (microbit)   46 000   53 100   67 500
+ * and at most 33 900 (M4) / 76 400 (M0) over the PIL scenarios (the step
+ * in which dcm_ia_offset's fault is isolated: the model rules' matching
+ * with symptoms present, two RLS updates, the trouble code stored). Where
+ * the instructions go, per module, per slot of the rate schedule and in
+ * the costliest steps: `make bench-pil-profile` (tests/pil/pil_profile.py).
+ * On the M4 in dcm_ia_offset (mean 24 600): the state-variable filters
+ * 4 600 (fifteen, every step), the diagnosis 3 100 (symptom persistence
+ * and hard rules every step, the matching every 10 ms), parity_dcm 2 500,
+ * DTC routing and memory 2 700, the RLS updates 1 400, input supervision
+ * 1 000, the rest below 1 000 a module. A 1 ms step needs a Cortex-M4 of
+ * roughly 40 MHz or more with margin (the worst step at ~1.2 cycles per
+ * instruction: 41 MHz for the whole millisecond); on a Cortex-M0 at
+ * 48 MHz it does not fit (the M0 needs its 32x32->64 products from 16-bit
+ * halves, core/canfdi_intrin.h, and runs ~2.2 times the M4's count).
+ * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
+ * the ECU's frames bit-identical between the host build and the target
+ * builds. With a tester's requests in flight (`make pil-test`, the SIL log
+ * of tests/sil/scenarios/uds_workshop.scn): at most 27 800 (M4) / 59 900
+ * (M0) in those steps, within the same run's maxima (32 300 / 62 800).
+ * Stated worst case, whatever the step receives: 38 000 instructions on
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 33 919 / 76 384,
  * with ~10 % margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
- * jittered steps) run on QEMU; 304 inputs, 121 725 steps: at most 39 547
- * (M4) / 76 433 (M0), rejected and implausible input costs less than the
- * models running on valid data.
+ * jittered steps) run on QEMU; rejected and implausible input costs less
+ * than the models running on valid data.
  * Rate schedule (docs/architecture.md, "Rate schedule"): a 10 ms frame of
  * CANFDI_APP_FRAME_SLOTS 1 ms slots (app->slot). Every step: input
  * supervision, vote, control, gates, parity residuals and the estimators'
@@ -151,7 +160,7 @@
  * all of the application's RAM, static: 11 328 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 784 B and 1 960 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 840 B and 1 968 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H

@@ -48,13 +48,16 @@
  *   q31_mul_rnd         21 / 22 / 22        70 / 72 / 78
  *   mul_s32_qn (var n)  20 / 49 / 52        66 / 117 / 125
  *   mul_s64_q31         32 / 35 / 40        128 / 133 / 147
- *   add_s64_sat         20 / 26 / 28        28 / 33 / 39
+ *   add_s64_sat         20 / 26 / 28        28 / 33 / 39  (portable form)
  *   q15_div             22 / 35 / 36        25 / 158 / 238
  *   q31_div             22 / 119 / 146      25 / 670 / 974
  *   isqrt_u32           162 / 163 / 163     153 / 166 / 179
  *   isqrt_u64           478 / 521 / 568     1111 / 1171 / 1235
  *   q31_sqrt            16 / 266 / 598      20 / 592 / 1280
  *
+ * The add_s64_sat row is the portable form's (CANFDI_FIXP_PORTABLE) with
+ * its call; the default form through the overflow builtins is an
+ * ADDS/ADCS pair and a branch on the overflow flag, inline.
  * Code size of canfdi_fixp.c (-Os): 444 bytes (M4), 492 bytes (M0+), plus
  * the libgcc helpers named above. RAM: none.
  */

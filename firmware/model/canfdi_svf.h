@@ -66,15 +66,15 @@
  *   p + q < 2^20 (true for T = 1 ms or 0.5 ms and any allowed wc; init's
  *   exact integer arithmetic needs (p + q)^3 < 2^60).
  *
- * Cost per canfdi_svf_step (n = order): n^2 canfdi_mul_s64_q31 (4 or 9),
- * ~3n + 4 saturating 64-bit adds/shifts, and 3 64-bit multiplies by wc
- * (one for dy, two for d2y) to form the outputs. Measured executed
- * instructions per call (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386
- * -icount, SysTick; wc 100 rad/s, 4000 calls with steps between -3 and 10
- * units plus 0.2 % full-scale samples; min / mean / max):
- *   n = 2   Cortex-M4   551 /  567 /  588   Cortex-M0+ code 1268 / 1305 / 1325
- *   n = 3   Cortex-M4   835 /  903 /  927   Cortex-M0+ code 2203 / 2295 / 2325
- * (the M0+ cost is mostly __aeabi_lmul calls: every 64-bit product).
+ * Cost per canfdi_svf_step (n = order): n^2 rounded products of a 64-bit
+ * state difference and a Q31 gain (4 or 9; each a SMULL and a UMULL on
+ * ARMv7-M, their 16-bit halves on ARMv6-M), plain 64-bit sums under the
+ * state bound of canfdi_svf.c, and per output computed (cfg.outputs) a
+ * rounding with up to two 64-bit products by wc (none for y, one for dy,
+ * two for d2y). Measured executed instructions per call in the
+ * application (`make bench-pil-profile`, dcm_ia_offset: the eleven
+ * order-3 and four order-2 filters with their output sets, wc 100-300):
+ * ~330 on the Cortex-M4, ~1 000 on the Cortex-M0.
  * canfdi_svf_init: a gcd (64-bit modulo, a few iterations) and n^2 31-step
  * long divisions, < 10 k instructions; not for the 1 ms path.
  * Memory: sizeof(canfdi_svf_t) = 104 bytes on a 32-bit target, caller-owned.
