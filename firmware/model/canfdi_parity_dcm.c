@@ -131,7 +131,9 @@ static int64_t pdcm_mac(int64_t acc, canfdi_parity_dcm_coef_t c, int32_t x, unsi
     const uint32_t lo = (uint32_t)u;
     const uint32_t hi = (uint32_t)(u >> 32);
     const unsigned k = (unsigned)s;
-    const uint32_t rlo = (lo >> k) | (hi << (32U - k));
+    /* the high word's low k bits move down: masked first, so that the left
+     * shift drops nothing */
+    const uint32_t rlo = (lo >> k) | ((hi & ((1U << k) - 1U)) << (32U - k));
     const int32_t rhi = canfdi_asr32(canfdi_wrap_u32_to_s32(hi), k);
     t = canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)rhi << 32) | rlo) + (int64_t)((lo >> (k - 1U)) & 1U);
   } else {

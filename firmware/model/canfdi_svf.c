@@ -146,7 +146,8 @@ static inline __attribute__((always_inline)) int64_t svf_mul_q31(int64_t a, int3
   const uint32_t al = (uint32_t)((uint64_t)a & 0xFFFFFFFFU);
   const int64_t hi = canfdi_smull32(ah, g); /* |hi| < 2^55 */
   /* al g with al unsigned: the unsigned product less al 2^32 for a
-   * negative g (exact; |al g| < 2^63) */
+   * negative g, modulo 2^64 by design (exact as a signed value: |al g| <
+   * 2^63; tests/fuzz/ignorelist.txt) */
   const uint64_t alg = canfdi_umull32(al, (uint32_t)g) - ((g < 0) ? ((uint64_t)al << 32) : 0U);
   const int64_t lo = canfdi_asr64_rnd(canfdi_wrap_u64_to_s64(alg), 31U);
   return (2 * hi) + lo;
