@@ -892,7 +892,26 @@ static void report_phase(canfdi_diagnosis_t *d, const verdicts_t *v, int8_t repo
   }
 }
 
-void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
+/* Between full steps: a component whose hard rule fires is cleared as in
+ * a full step (its model verdicts NONE until the next one); the others
+ * keep the last full step's result and model verdicts. */
+static void hard_components(canfdi_diagnosis_t *d, verdicts_t *v)
+{
+  uint32_t c;
+  for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+    canfdi_diagnosis_result_t *res = &d->res[c];
+    const uint8_t prev_isolated = res->isolated;
+    if (v->hard_any[c]) {
+      const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (v->hv[prev_isolated] == V_FAIL);
+      res->detected = true;
+      component_hard(d, c, prev_hard, v);
+    }
+  }
+}
+
+/* One step; model: a full step (the model rules' matching), else a step of
+ * the hard rules with the last full step's model verdicts. */
+static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[], bool model)
 {
   if ((d == NULL) || !d->initialised || (s == NULL)) {
     if ((d != NULL) && d->initialised) {
@@ -909,13 +928,17 @@ void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     update_channels(d, s);
     for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
       v.hv[i] = V_NA;
-      v.mv[i] = V_NA;
+      v.mv[i] = model ? V_NA : d->mv_last[i];
     }
     for (i = 0U; i < CANFDI_DIAG_N_COMP; i++) {
       v.hard_any[i] = false;
     }
     hard_phase(s, flags_now(d), &v);
-    component_phase(d, &v);
+    if (model) {
+      component_phase(d, &v);
+    } else {
+      hard_components(d, &v);
+    }
     for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
       d->mv_last[i] = v.mv[i];
     }
@@ -924,45 +947,14 @@ void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
   }
 }
 
+void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
+{
+  diagnosis_step(d, s, report, true);
+}
+
 void canfdi_diagnosis_step_hard(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
 {
-  if ((d == NULL) || !d->initialised || (s == NULL)) {
-    if ((d != NULL) && d->initialised) {
-      canfdi_count_inc(&d->diag.rejected);
-    }
-    if (report != NULL) {
-      fill_none(report);
-    }
-  } else {
-    verdicts_t v;
-    uint32_t i;
-    uint32_t c;
-    canfdi_count_inc(&d->diag.steps);
-    update_flags(d, s);
-    update_channels(d, s);
-    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-      v.hv[i] = V_NA;
-      v.mv[i] = d->mv_last[i];
-    }
-    for (i = 0U; i < CANFDI_DIAG_N_COMP; i++) {
-      v.hard_any[i] = false;
-    }
-    hard_phase(s, flags_now(d), &v);
-    for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
-      canfdi_diagnosis_result_t *res = &d->res[c];
-      const uint8_t prev_isolated = res->isolated;
-      if (v.hard_any[c]) {
-        const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (v.hv[prev_isolated] == V_FAIL);
-        res->detected = true;
-        component_hard(d, c, prev_hard, &v);
-        for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-          d->mv_last[i] = v.mv[i]; /* the component's model verdicts are NONE until the next full step */
-        }
-      }
-    }
-    corr_phase(d, &v);
-    report_phase(d, &v, report);
-  }
+  diagnosis_step(d, s, report, false);
 }
 
 uint8_t canfdi_diagnosis_isolated(const canfdi_diagnosis_t *d, uint8_t component, uint8_t *confidence_pct)
