@@ -274,7 +274,10 @@ def test_forged_ecu_frames_are_flagged_live_and_in_the_recording(capsys: pytest.
     results: dict[str, int] = {}
 
     def run_watch() -> None:
-        results["live"] = watch.main(["-c", CHANNEL, "--duration", "3.5", "--timeout", "120"])
+        # until 7.5 s of the 8 s run: the forged frames go out after 1.5 s
+        # plus however long reading the ECU's counters takes, in which the
+        # lockstep bench runs on (over 2 s of the run on a loaded machine)
+        results["live"] = watch.main(["-c", CHANNEL, "--duration", "7.5", "--timeout", "120"])
     t = threading.Thread(target=run_watch)
     t.start()
     time.sleep(1.0)   # the watcher's socket is open
@@ -283,7 +286,7 @@ def test_forged_ecu_frames_are_flagged_live_and_in_the_recording(capsys: pytest.
     slow = can.Bus(interface="socketcan", channel=CHANNEL,
                    can_filters=[{"can_id": 0x300, "can_mask": 0x7FF}, {"can_id": 0x310, "can_mask": 0x7FF}])
     try:
-        with Bench(log, NOMINAL, "4") as b:
+        with Bench(log, NOMINAL, "8") as b:
             b.mon.wait_step(1000, b.sim)
             cansend(forged("EcuDiagnosis", 0, False, DiagComFaultId=102, DiagComConfidence=193))
             cansend(forged("EcuDtc", 0, False, DtcCode=0x022200, **dtc))
