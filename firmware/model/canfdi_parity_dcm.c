@@ -133,7 +133,8 @@ static int64_t pdcm_mac(int64_t acc, canfdi_parity_dcm_coef_t c, int32_t x, unsi
     const unsigned k = (unsigned)s;
     /* the high word's low k bits move down: masked first, so that the left
      * shift drops nothing */
-    const uint32_t rlo = (lo >> k) | ((hi & ((1U << k) - 1U)) << (32U - k));
+    const uint32_t mask = ((uint32_t)1U << k) - 1U;
+    const uint32_t rlo = (lo >> k) | ((hi & mask) << (32U - k));
     const int32_t rhi = canfdi_asr32(canfdi_wrap_u32_to_s32(hi), k);
     t = canfdi_wrap_u64_to_s64(((uint64_t)(uint32_t)rhi << 32) | rlo) + (int64_t)((lo >> (k - 1U)) & 1U);
   } else {
