@@ -207,18 +207,15 @@
  * for candidacy, then for a candidate a 10-entry weighted sum and one
  * 32-bit division (<= 28 per step). The patterns are compiled to bit masks
  * at init (canfdi_diagnosis_rule_t), so the step never parses text.
- * Measured executed instructions per call (arm-none-eabi-gcc 12 -Os, QEMU
- * mps2-an386 -icount shift=6, SysTick; min / mean / max):
- *   fault-free noise (4000 steps)        M4 3 410 / 3 430 / 3 450
- *                                        M0+ 4 870 / 4 910 / 4 960
- *   random symptoms, validity and flags  M4 3 500 / 4 530 / 4 960
- *   (20 000 steps, both components)      M0+ 5 010 / 6 440 / 7 010
- *   both components detected, ambiguous  M4 3 480 / 4 710 / 4 830
- *                                        M0+ 5 010 / 6 760 / 6 880
- * (M0+ = ARMv6-M code run on the same model: instruction counts, not
- * cycles; ~0.15 ms at 48 MHz for 7 k.) Code: 3.7 kB (M0+), 3.5 kB (M4),
- * ROM tables included. Stack (-fstack-usage, M0+): step 176 bytes plus a
- * 40-byte callee.
+ * canfdi_diagnosis_step_hard leaves out the model rules' matching. In
+ * the application (the matching in one step of ten, the rest in every
+ * step; `make bench-pil-profile`, dcm_ia_offset scenario, QEMU -icount,
+ * arm-none-eabi-gcc -Os) this module's own code took 3 320 instructions
+ * per step on average on Cortex-M4 and 4 450 on Cortex-M0 (instruction
+ * counts, not cycles). Code (`make footprint`, the application image):
+ * 5.3 kB (M4), 5.7 kB (M0),
+ * ROM tables included. Stack (-fstack-usage, M0): canfdi_diagnosis_step
+ * 192 bytes, calling update_channels (80) which calls channel (40).
  * Memory: sizeof(canfdi_diagnosis_t) = 808 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag
  * persistence, the normalised values, the compiled rules, the weights, the

@@ -59,11 +59,10 @@
  *
  * Cost per step: 4 SVF steps (order 2; the fourth filters the known load
  * offset) every step, plus one RLS update of 3 parameters on two of every
- * `decim` steps (never both in one step). Measured executed instructions
- * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; default
- * cfg, 4000 steps of an excited operating point around 100 rad/s and 4 A):
- * Cortex-M4 mean 7 000, max 14 300 (a step with an RLS update); Cortex-M0+
- * code mean 14 500, max 27 500. Memory: sizeof(canfdi_est_dcm_t) = 1232
+ * `decim` steps (never both in one step): canfdi_svf.h and canfdi_rls.h
+ * state their cost per call; `make bench-pil-profile` measures the whole
+ * step in the application, per module and function
+ * (build/bench/pil_profile.json). Memory: sizeof(canfdi_est_dcm_t) = 1232
  * bytes on a 32-bit target (four SVFs and two RLS instances sized
  * CANFDI_CFG_RLS_MAX_PARAMS).
  */

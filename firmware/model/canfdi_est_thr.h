@@ -118,13 +118,11 @@
  * Cost per step: 4 SVF steps of order 3 every step, plus one RLS update
  * (4 parameters, or 5 for the mechanical part) on each of two steps out of
  * `decim`; the fast test adds ~40 multiplies and 3 64-bit divisions per
- * mechanical update. Measured executed instructions (arm-none-eabi-gcc 12
- * -Os, QEMU mps2-an386 -icount, SysTick; default cfg, 4000 steps of the
- * valve stroking between 0.46 and 1.07 rad, 1201 of them with a mechanical
- * update): Cortex-M4 mean 17 100, max 28 800 (a step with the mechanical
- * update and the fast test); Cortex-M0+ code mean 34 100, max 56 100
- * (1.2 ms at 48 MHz: on a small M0+ raise decim, the memory 1/(forget
- * rate) scales with it). Memory: sizeof(canfdi_est_thr_t) = 1344 bytes on
+ * mechanical update: canfdi_svf.h and canfdi_rls.h state their cost per
+ * call; `make bench-pil-profile` measures the whole step in the
+ * application, per module and function (build/bench/pil_profile.json).
+ * A larger decim lowers the average (the memory 1/(forget rate) scales
+ * with it). Memory: sizeof(canfdi_est_thr_t) = 1344 bytes on
  * a 32-bit target.
  */
 #ifndef CANFDI_EST_THR_H

@@ -229,15 +229,12 @@
  * saturating add each) plus 11 rounded 32x32 multiplies by the dp, 4
  * canfdi_div_s32_qn (32/32 path while |r| < 1 unit, else 64/64), and every
  * ra_block_steps-th step the R_A update (4 long divisions of 31
- * iterations). Measured executed instructions per call (arm-none-eabi-gcc
- * 12 -Os, QEMU mps2-an386 with -icount, SysTick; default cfg, 4000 calls on
- * a synthetic operating point around 100 rad/s, 4 A, 38 V with +-20 rad/s
- * and +-0.5 A swings and 0.2 % full-scale (saturating) samples; min / mean
- * / max, the max includes an R_A update):
- *   Cortex-M4    6 600 /  7 700 / 11 000
- *   Cortex-M0+  17 100 / 19 600 / 25 200  (ARMv6-M code on the same core:
- *               instruction counts, not cycles; ~0.41 ms mean, 0.53 ms
- *               max at 48 MHz)
+ * iterations). `make bench-pil-profile` measures it in the application,
+ * per module and function (build/bench/pil_profile.json; the SVF steps,
+ * the thresholds and the 64-bit helpers are counted under canfdi_svf,
+ * canfdi_adapt, canfdi_fixp, canfdi_intrin and libgcc there): in the
+ * dcm_ia_offset scenario this module's own code took 2 650 instructions
+ * per step on average on Cortex-M4 and 5 480 on Cortex-M0.
  * Most of it is the four third-order SVFs and 64-bit arithmetic, which
  * ARMv6-M lacks. Code: 5.6 kB (M4), 6.8 kB (M0+) object text plus
  * canfdi_svf, adapt and fixp. Memory: sizeof(canfdi_parity_dcm_t) = 888

@@ -220,13 +220,10 @@
  *
  * Cost per canfdi_parity_thr_step: 3 SVF steps of order 3, 4
  * canfdi_adapt_step, 4 canfdi_div_s32_qn, ~20 64-bit multiplies and ~60
- * saturating 64-bit adds/shifts. Measured executed instructions per call
- * (arm-none-eabi-gcc 12 -Os, QEMU mps2-an386 -icount, SysTick; default cfg,
- * 4000 calls of synthetic strokes between 0.3 and 0.8 rad with current
- * swings, clipped and out-of-range samples and bridge-off phases; min /
- * mean / max):
- *   Cortex-M4    4 300 /  5 300 /  5 300
- *   Cortex-M0+  11 000 / 13 400 / 13 600  (instruction counts)
+ * saturating 64-bit adds/shifts. `make bench-pil-profile` measures it in
+ * the application, per module and function (build/bench/pil_profile.json;
+ * the SVF steps, the thresholds and the 64-bit helpers are counted under
+ * canfdi_svf, canfdi_adapt, canfdi_fixp, canfdi_intrin and libgcc there).
  * Code: 5.1 kB (M4), 6.0 kB (M0+) plus canfdi_tps, svf, adapt and fixp.
  * Memory: sizeof(canfdi_parity_thr_t) = 736 bytes on a 32-bit target,
  * caller-owned; the configuration (188 bytes) must outlive the instance.
