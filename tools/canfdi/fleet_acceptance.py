@@ -2,7 +2,7 @@
 
   python -m canfdi.fleet_acceptance FLEET_DIR OUT_DIR [--json FILE]
 
-Checks, per vehicle (issue 16's acceptance):
+Checks, per vehicle (docs/fleet.md, "Acceptance"):
   found      every developing fault's code is found in that vehicle, first in the drive where its
              magnitude first reached the threshold, +/- 1 drive (a fault that has not reached it by
              the last drive counts as crossing in the drive after it)
