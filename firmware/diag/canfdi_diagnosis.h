@@ -212,9 +212,8 @@
  * step; `make bench-pil-profile`, dcm_ia_offset scenario, QEMU -icount,
  * arm-none-eabi-gcc -Os) this module's own code took 3 320 instructions
  * per step on average on Cortex-M4 and 4 450 on Cortex-M0 (instruction
- * counts, not cycles). Code (`make footprint`, the application image):
- * 5.3 kB (M4), 5.7 kB (M0),
- * ROM tables included. Stack (-fstack-usage, M0): canfdi_diagnosis_step
+ * counts, not cycles). Code (`make footprint`, the application image,
+ * ROM tables included): 5.2 kB (M4), 5.5 kB (M0). Stack (-fstack-usage, M0): canfdi_diagnosis_step
  * 192 bytes, calling update_channels (80) which calls channel (40).
  * Memory: sizeof(canfdi_diagnosis_t) = 808 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag

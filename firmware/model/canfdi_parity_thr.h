@@ -224,7 +224,8 @@
  * the application, per module and function (build/bench/pil_profile.json;
  * the SVF steps, the thresholds and the 64-bit helpers are counted under
  * canfdi_svf, canfdi_adapt, canfdi_fixp, canfdi_intrin and libgcc there).
- * Code: 5.1 kB (M4), 6.0 kB (M0+) plus canfdi_tps, svf, adapt and fixp.
+ * Code (`make footprint`, the application image): 6.0 kB (M4), 7.4 kB
+ * (M0) plus canfdi_tps, svf, adapt and fixp.
  * Memory: sizeof(canfdi_parity_thr_t) = 736 bytes on a 32-bit target,
  * caller-owned; the configuration (188 bytes) must outlive the instance.
  * No heap, no globals, no floating point; reentrant per instance.
