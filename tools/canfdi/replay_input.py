@@ -45,9 +45,10 @@ import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterator, TextIO
+from typing import TYPE_CHECKING, Any, Callable, Iterator, TextIO
 
-import can
+if TYPE_CHECKING:  # python-can (with asammdf and pandas) is imported only to convert a non-candump log
+    import can
 
 #: Suffixes of the formats python-can reads, without ".gz".
 PYCAN_FORMATS = {".asc": "asc", ".blf": "blf", ".trc": "trc", ".csv": "csv", ".mf4": "mf4"}
@@ -263,7 +264,11 @@ class _FakeHeader:
         self.inner.close()
 
 
-_TEXT_READERS: dict[str, type] = {"asc": can.ASCReader, "trc": can.TRCReader, "csv": can.CSVReader}
+def _text_reader(fmt: str) -> type:
+    """python-can's reader class of a text format (imported here: a candump log needs none of it)."""
+    import can
+
+    return {"asc": can.ASCReader, "trc": can.TRCReader, "csv": can.CSVReader}[fmt]
 
 
 #: python-can's TRC reader logs the lines it cannot parse as warnings; they are reported here
@@ -289,7 +294,7 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
     raw: TextIO = gzip.open(path, "rt", encoding="utf-8", errors="replace") if gz \
         else open(path, encoding="utf-8", errors="replace")
     lines = _CountingLines(raw, fmt, lambda n, why, text: problems.add(path, n, why, text))
-    cls = _TEXT_READERS[fmt]
+    cls = _text_reader(fmt)
     try:
         reader = cls(lines)
         while True:
@@ -320,6 +325,8 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
 
 
 def _binary_messages(path: Path, fmt: str, problems: Problems) -> Iterator[tuple[int, can.Message]]:
+    import can  # see _text_reader
+
     n = 0
     with _quiet_destructors():
         try:

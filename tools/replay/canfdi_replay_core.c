@@ -1118,23 +1118,23 @@ static bool on_channel(const rp_frame_t *f, uint64_t line)
 {
   unsigned i;
   if (!rp.chan_fixed && !f->ext && (f->kind == RP_KIND_DATA) && in_dbc(f->id)) {
-    (void)snprintf(rp.chan, sizeof rp.chan, "%s", f->chan);
+    rp_chan_set(rp.chan, f->chan);
     rp.chan_fixed = true;
     fprintf(ev, "{\"ev\":\"channel\",\"file\":%d,\"name\":", rp.file_index);
     ev_str(rp.chan, strlen(rp.chan));
     fprintf(ev, ",\"line\":%" PRIu64 ",\"chosen\":\"%s\"}\n", line, (opt.channel != NULL) ? "option" : "first frame of the DBC");
   }
-  if (!rp.chan_fixed || (strcmp(f->chan, rp.chan) == 0)) {
+  if (!rp.chan_fixed || rp_chan_eq(f->chan, rp.chan)) {
     return true;
   }
   for (i = 0U; i < rp.n_other; i++) {
-    if (strcmp(rp.other_chan[i], f->chan) == 0) {
+    if (rp_chan_eq(rp.other_chan[i], f->chan)) {
       rp.other_chan_n[i]++;
       return false;
     }
   }
   if (rp.n_other < N_CHANS) {
-    (void)snprintf(rp.other_chan[rp.n_other], RP_CHAN_MAX, "%s", f->chan);
+    rp_chan_set(rp.other_chan[rp.n_other], f->chan);
     rp.other_chan_n[rp.n_other] = 1U;
     rp.other_chan_line[rp.n_other] = line;
     rp.n_other++;
@@ -1165,7 +1165,7 @@ static int32_t wrap_step(int64_t x)
 static int grid_plant(const rp_frame_t *f, const char *chan)
 {
   int i = -1;
-  if ((f->kind == RP_KIND_DATA) && !f->ext && (strcmp(f->chan, chan) == 0)) {
+  if ((f->kind == RP_KIND_DATA) && !f->ext && rp_chan_eq(f->chan, chan)) {
     if (f->id == CANFDI_RP_MSG_DCM_SENSOR_FRAME_ID) {
       i = CANFDI_RX_F_DCM_SENSOR;
     } else if (f->id == CANFDI_RP_MSG_THR_SENSOR_FRAME_ID) {
@@ -1721,7 +1721,7 @@ static void reset_file_state(int index, const char *name)
   rp.truncated = false;
   rp.chan_fixed = (opt.channel != NULL);
   if (opt.channel != NULL) {
-    (void)snprintf(rp.chan, sizeof rp.chan, "%s", opt.channel);
+    rp_chan_set(rp.chan, opt.channel);
   }
   rp.n_other = 0U;
   rp.clock_decided = false;

@@ -131,8 +131,8 @@ int rp_candump_parse(const char *s, size_t n, rp_frame_t *f, const char **why)
     *why = "channel name longer than 15 characters";
     return RP_LINE_BAD;
   }
+  memset(f->chan, 0, RP_CHAN_MAX);
   memcpy(f->chan, &s[c0], i - c0);
-  f->chan[i - c0] = '\0';
   while ((i < n) && is_space(s[i])) {
     i++;
   }

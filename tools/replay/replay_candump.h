@@ -23,6 +23,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #define RP_KIND_DATA 0U   /* classic data frame */
 #define RP_KIND_FD 1U     /* CAN FD frame */
@@ -40,8 +41,24 @@ typedef struct {
   uint8_t kind;            /* RP_KIND_* */
   uint8_t len;             /* data bytes (classic 0..8, FD 0..64) */
   uint8_t data[64];
-  char chan[RP_CHAN_MAX];  /* interface name, NUL-terminated */
+  char chan[RP_CHAN_MAX];  /* interface name, NUL-padded to RP_CHAN_MAX */
 } rp_frame_t;
+
+/* Whether two channel names are the same, both NUL-padded to RP_CHAN_MAX
+ * (as the parser and rp_chan_set leave them): one fixed-size compare per
+ * frame instead of a strcmp call. */
+static inline bool rp_chan_eq(const char *a, const char *b) { return memcmp(a, b, RP_CHAN_MAX) == 0; }
+
+/* dst (RP_CHAN_MAX bytes) = src cut to RP_CHAN_MAX - 1 characters, NUL-padded. */
+static inline void rp_chan_set(char *dst, const char *src)
+{
+  size_t n = strlen(src);
+  if (n >= RP_CHAN_MAX) {
+    n = RP_CHAN_MAX - 1U;
+  }
+  memset(dst, 0, RP_CHAN_MAX);
+  memcpy(dst, src, n);
+}
 
 #define RP_LINE_FRAME 1
 #define RP_LINE_EMPTY 0
