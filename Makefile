@@ -33,8 +33,9 @@ include mk/unit.mk
 # Keep object files of test programs between runs.
 .SECONDARY:
 
+# CANFDI_DEPS_DONE=1: make test's own steps, after its deps ran once.
 deps:
-	@bash tools/deps.sh
+	@$(if $(CANFDI_DEPS_DONE),:,bash tools/deps.sh)
 
 all: $(UNIT_BIN) $(ALL_STEPS)
 
@@ -42,8 +43,16 @@ $(BUILD)/host/%.o: %.c
 	@mkdir -p $(@D)
 	$(CC) $(HOST_CFLAGS) $(SRC_CFLAGS_$<) -MMD -MP -c $< -o $@
 
-test: deps unit $(TEST_STEPS)
-	@echo "make test: all steps passed"
+# The steps run one after another, each in a make of its own, so that the
+# time of each is printed as it passes (and kept in $(BUILD)/test-times.txt):
+# the first failing step stops the run with its own error.
+test: deps unit
+	@set -e; mkdir -p $(BUILD); : > $(BUILD)/test-times.txt; t_all=$$(date +%s); \
+	 for s in $(TEST_STEPS); do t0=$$(date +%s); \
+	   $(MAKE) --no-print-directory CANFDI_DEPS_DONE=1 $$s; \
+	   printf 'make test: %-24s passed in %4d s\n' "$$s" $$(( $$(date +%s) - t0 )) | tee -a $(BUILD)/test-times.txt; \
+	 done; \
+	 printf 'make test: all steps passed in %d s\n' $$(( $$(date +%s) - t_all )) | tee -a $(BUILD)/test-times.txt
 
 demo: deps
 	@$(MAKE) --no-print-directory demo-run
