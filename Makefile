@@ -45,11 +45,14 @@ $(BUILD)/host/%.o: %.c
 
 # The steps run one after another, each in a make of its own, so that the
 # time of each is printed as it passes (and kept in $(BUILD)/test-times.txt):
-# the first failing step stops the run with its own error.
-test: deps unit
+# the first failing step stops the run with its own error. Within a step,
+# make builds and runs independent targets TEST_JOBS at a time (default:
+# one per core; TEST_JOBS=1 for one at a time, e.g. to read a failure).
+TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
+test: deps
 	@set -e; mkdir -p $(BUILD); : > $(BUILD)/test-times.txt; t_all=$$(date +%s); \
-	 for s in $(TEST_STEPS); do t0=$$(date +%s); \
-	   $(MAKE) --no-print-directory CANFDI_DEPS_DONE=1 $$s; \
+	 for s in unit $(TEST_STEPS); do t0=$$(date +%s); \
+	   $(MAKE) -j$(TEST_JOBS) --no-print-directory CANFDI_DEPS_DONE=1 $$s; \
 	   printf 'make test: %-24s passed in %4d s\n' "$$s" $$(( $$(date +%s) - t0 )) | tee -a $(BUILD)/test-times.txt; \
 	 done; \
 	 printf 'make test: all steps passed in %d s\n' $$(( $$(date +%s) - t_all )) | tee -a $(BUILD)/test-times.txt

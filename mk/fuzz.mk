@@ -134,12 +134,17 @@ fuzz_run = set -eo pipefail; h=$(1); \
 	  then echo interrupted; else echo crash; fi) >>$(BUILD)/bench/fuzz.tsv; \
 	[ $$rc = 0 ] || { tail -60 $(FUZZ_OUT)/$$h.log; grep -aq 'run interrupted' $(FUZZ_OUT)/$$h.log && echo "fuzz_$$h: interrupted" || \
 	  echo "fuzz_$$h: crash, input in $(FUZZ_OUT)/crash/"; exit 1; }; \
-	grep -a -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added)' $(FUZZ_OUT)/$$h.log | tr '\n' ' '; echo
+	{ printf 'fuzz_%s: ' $$h; grep -a -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added)' $(FUZZ_OUT)/$$h.log | tr '\n' ' '; echo; }
 
 fuzz: $(patsubst %,$(FUZZ_OUT)/fuzz_%,$(filter-out $(FUZZ_PY),$(FUZZ_HARNESSES)))
 	@$(foreach h,$(FUZZ_HARNESSES),$(call fuzz_run,$(h),$(FUZZ_SECONDS),$(FUZZ_RUNS));)
 
-fuzz-test: deps $(FUZZ_BIN)
-	@$(foreach h,$(FUZZ_ALL) $(FUZZ_PY),$(call fuzz_run,$(h),$(FUZZ_TEST_SECONDS));)
+# One target per harness, so that make -j (make test's TEST_JOBS) runs as
+# many at a time: each still fuzzes FUZZ_TEST_SECONDS on a core of its own.
+FUZZ_TEST_RUNS := $(addprefix fuzz-test-,$(FUZZ_ALL) $(FUZZ_PY))
+.PHONY: $(FUZZ_TEST_RUNS)
+$(FUZZ_TEST_RUNS): fuzz-test-%: deps $(FUZZ_BIN)
+	@$(call fuzz_run,$*,$(FUZZ_TEST_SECONDS))
+fuzz-test: $(FUZZ_TEST_RUNS)
 
 TEST_STEPS += fuzz-test

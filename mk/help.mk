@@ -24,7 +24,7 @@ Demonstrations
   make demo-fleet           a small synthetic fleet through canfdi-fleet: Parquet and the HTML fleet report
 
 Tests (`make test` runs those marked *)
-  make test                 everything CI checks (about 12 min from a fresh clone on 2 cores)
+  make test                 everything CI checks, each step timed (TEST_JOBS=N: N at a time within a step; default one per core)
   make unit               * firmware unit tests, libcheck, ASan/UBSan, C99, x86-64 (CK_FORK=yes isolates)
   make unit-c11           * the same unit tests built as C11
   make unit-m32           * the same unit tests built for 32-bit x86 (ILP32, like the targets)

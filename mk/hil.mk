@@ -45,11 +45,21 @@ $(BUILD)/hil/test/%-sil.log: tests/sil/scenarios/%.scn $(BUILD)/bin/canfdi-sil
 # a scenario's profile file (`profile`) is part of it
 $(BUILD)/hil/test/supply_profile-sil.log: tests/sil/scenarios/supply_profile.csv
 
-.PHONY: hil-test hil
-hil-test: deps $(HIL_BINS) $(HIL_SIL_LOGS)
-	@$(VCAN_RUN) --timeout 1800 env CANFDI_HIL_REQUIRED=1 CANFDI_SIM=$(CURDIR)/$(BUILD)/bin/canfdi-sim \
-	  CANFDI_SIM_HIL=$(CURDIR)/$(HIL_SIM) PYTHONDONTWRITEBYTECODE=1 \
-	  $(PY) -m pytest -p no:cacheprovider tests/hil tests/sim/test_canfdi_sim_can.py -q
+# Two sandboxes, each one pytest: the lockstep scenarios (tests/hil/
+# test_scenarios.py) and the rest (the bus, bus faults, UDS, the simulator's
+# vcan tests). A User-Mode Linux sandbox runs on one CPU, so make -j (make
+# test's TEST_JOBS) runs the two side by side, each on a core of its own.
+# They write different files of build/hil/test/ and have their own pytest
+# temporary directories.
+HIL_PYTEST = @mkdir -p $(BUILD)/pytest && $(VCAN_RUN) --timeout 1800 env CANFDI_HIL_REQUIRED=1 \
+	  CANFDI_SIM=$(CURDIR)/$(BUILD)/bin/canfdi-sim CANFDI_SIM_HIL=$(CURDIR)/$(HIL_SIM) PYTHONDONTWRITEBYTECODE=1 \
+	  $(PY) -m pytest -p no:cacheprovider -q --basetemp=$(CURDIR)/$(BUILD)/pytest/$@
+.PHONY: hil-test hil-test-lockstep hil-test-bus hil
+hil-test-lockstep: deps $(HIL_BINS) $(HIL_SIL_LOGS)
+	$(HIL_PYTEST) tests/hil/test_scenarios.py
+hil-test-bus: deps $(HIL_BINS)
+	$(HIL_PYTEST) tests/hil --ignore=tests/hil/test_scenarios.py tests/sim/test_canfdi_sim_can.py
+hil-test: hil-test-lockstep hil-test-bus
 
 TEST_STEPS += hil-test
 

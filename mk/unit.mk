@@ -20,13 +20,11 @@
 # report); `make unit CK_FORK=yes` isolates every test again.
 CK_FORK ?= no
 
-# $(call run_check_programs,NAME,PROGRAMS): run each program, report how
-# many failed, fail if any did.
-run_check_programs = set -e; fails=0; for t in $(2); do \
-	  echo "== $$t"; \
-	  if ! CK_FORK=$(CK_FORK) CK_DEFAULT_TIMEOUT=600 $$t; then fails=$$((fails+1)); fi; \
-	done; \
-	if [ $$fails -ne 0 ]; then echo "$(1): $$fails test program(s) failed"; exit 1; fi
+# $(call run_check_programs,NAME,PROGRAMS): run the programs UNIT_JOBS at a
+# time (default: one per core), each one's output printed whole as it ends;
+# fail, naming them, if any failed (tools/run-each).
+UNIT_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
+run_check_programs = CK_FORK=$(CK_FORK) CK_DEFAULT_TIMEOUT=600 tools/run-each $(1) $(UNIT_JOBS) -- $(2)
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/unit/%)
