@@ -46,8 +46,9 @@ $(BUILD)/host/%.o: %.c
 # The steps run one after another, each in a make of its own, so that the
 # time of each is printed as it passes (and kept in $(BUILD)/test-times.txt):
 # the first failing step stops the run with its own error. Within a step,
-# make builds and runs independent targets TEST_JOBS at a time (default:
-# one per core; TEST_JOBS=1 for one at a time, e.g. to read a failure).
+# make builds and runs independent targets TEST_JOBS at a time, and so do
+# the runners of the unit programs, SIL scenarios and reference programs
+# (tools/run-each); default one per core, TEST_JOBS=1 for one at a time.
 TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 test: deps
 	@set -e; mkdir -p $(BUILD); : > $(BUILD)/test-times.txt; t_all=$$(date +%s); \

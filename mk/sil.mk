@@ -54,10 +54,10 @@ ALL_STEPS += $(SIL_BIN)
 # tests/unit/test_app.c (make unit, mk/unit.mk).
 .PHONY: sil-test sil-pending
 sil-test: $(SIL_BIN)
-	@bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_SCN)
+	@SIL_JOBS=$(TEST_JOBS) bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_SCN)
 
 sil-pending: $(SIL_BIN)
-	-@bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_PENDING)
+	-@SIL_JOBS=$(TEST_JOBS) bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_PENDING)
 
 TEST_STEPS += sil-test
 
@@ -69,10 +69,10 @@ SIL_MATRIX := $(sort $(wildcard tests/sil/matrix/*.scn))
 SIL_MATRIX_PENDING := $(sort $(wildcard tests/sil/matrix_pending/*.scn))
 .PHONY: sil-matrix sil-matrix-pending
 sil-matrix: $(SIL_BIN)
-	@bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_MATRIX)
+	@SIL_JOBS=$(TEST_JOBS) bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_MATRIX)
 
 sil-matrix-pending: $(SIL_BIN)
-	-@bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_MATRIX_PENDING)
+	-@SIL_JOBS=$(TEST_JOBS) bash tests/sil/run_scenarios.sh $(SIL_BIN) $(SIL_MATRIX_PENDING)
 
 TEST_STEPS += sil-matrix
 
@@ -93,7 +93,7 @@ BENCH_STEPS += sil-bench
 
 .PHONY: sil-long
 sil-long: $(SIL_REL_BIN)
-	@bash tests/sil/run_scenarios.sh $(SIL_REL_BIN) $(sort $(wildcard tests/sil/long/*.scn))
+	@SIL_JOBS=$(TEST_JOBS) bash tests/sil/run_scenarios.sh $(SIL_REL_BIN) $(sort $(wildcard tests/sil/long/*.scn))
 
 # Processor in the loop (the cross-compiled application on QEMU, fed SIL bus
 # logs): mk/pil.mk, tests/pil/.

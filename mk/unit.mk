@@ -20,11 +20,10 @@
 # report); `make unit CK_FORK=yes` isolates every test again.
 CK_FORK ?= no
 
-# $(call run_check_programs,NAME,PROGRAMS): run the programs UNIT_JOBS at a
-# time (default: one per core), each one's output printed whole as it ends;
-# fail, naming them, if any failed (tools/run-each).
-UNIT_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
-run_check_programs = CK_FORK=$(CK_FORK) CK_DEFAULT_TIMEOUT=600 tools/run-each $(1) $(UNIT_JOBS) -- $(2)
+# $(call run_check_programs,NAME,PROGRAMS): run the programs TEST_JOBS at a
+# time (the Makefile: one per core by default), each one's output printed
+# whole as it ends; fail, naming them, if any failed (tools/run-each).
+run_check_programs = CK_FORK=$(CK_FORK) CK_DEFAULT_TIMEOUT=600 tools/run-each $(1) $(TEST_JOBS) -- $(2)
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/unit/%)

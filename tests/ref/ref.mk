@@ -16,11 +16,7 @@ $(BUILD)/ref/%: tests/ref/%.cpp $(REF_HDR) $(FW_HOST_OBJ) $(UNIT_EXTRA_OBJ)
 
 .PHONY: ref-test
 ref-test: deps $(REF_BIN)
-	@set -e; fails=0; for t in $(REF_BIN); do \
-	  echo "== $$t"; \
-	  if ! $$t; then fails=$$((fails+1)); fi; \
-	done; \
-	if [ $$fails -ne 0 ]; then echo "ref-test: $$fails program(s) failed"; exit 1; fi
+	@tools/run-each ref-test $(TEST_JOBS) -- $(REF_BIN)
 
 TEST_STEPS += ref-test
 ALL_STEPS += $(REF_BIN)
