@@ -9,6 +9,10 @@ SHELL := /bin/bash
 BUILD ?= build
 VENV := .venv
 PY := $(CURDIR)/$(VENV)/bin/python
+# pytest runs that make -j may start side by side (make test's TEST_JOBS):
+# each with a temporary directory of its own, named after its target, under
+# $(BUILD)/pytest (an order-only prerequisite of those targets).
+PYTEST_OWN_TMP = -p no:cacheprovider -q --basetemp=$(CURDIR)/$(BUILD)/pytest/$@
 # Compilers and the flags of every build flavour, each defined once.
 include mk/flags.mk
 
@@ -32,6 +36,9 @@ include mk/unit.mk
 .PHONY: all deps test unit demo firmware bench clean help
 # Keep object files of test programs between runs.
 .SECONDARY:
+
+$(BUILD)/pytest:
+	@mkdir -p $@
 
 # CANFDI_DEPS_DONE=1: make test's own steps, after its deps ran once.
 deps:

@@ -51,13 +51,13 @@ $(BUILD)/hil/test/supply_profile-sil.log: tests/sil/scenarios/supply_profile.csv
 # test's TEST_JOBS) runs the two side by side, each on a core of its own.
 # They write different files of build/hil/test/ and have their own pytest
 # temporary directories.
-HIL_PYTEST = @mkdir -p $(BUILD)/pytest && $(VCAN_RUN) --timeout 1800 env CANFDI_HIL_REQUIRED=1 \
+HIL_PYTEST = @$(VCAN_RUN) --timeout 1800 env CANFDI_HIL_REQUIRED=1 \
 	  CANFDI_SIM=$(CURDIR)/$(BUILD)/bin/canfdi-sim CANFDI_SIM_HIL=$(CURDIR)/$(HIL_SIM) PYTHONDONTWRITEBYTECODE=1 \
-	  $(PY) -m pytest -p no:cacheprovider -q --basetemp=$(CURDIR)/$(BUILD)/pytest/$@
+	  $(PY) -m pytest $(PYTEST_OWN_TMP)
 .PHONY: hil-test hil-test-lockstep hil-test-bus hil
-hil-test-lockstep: deps $(HIL_BINS) $(HIL_SIL_LOGS)
+hil-test-lockstep: deps $(HIL_BINS) $(HIL_SIL_LOGS) | $(BUILD)/pytest
 	$(HIL_PYTEST) tests/hil/test_scenarios.py
-hil-test-bus: deps $(HIL_BINS)
+hil-test-bus: deps $(HIL_BINS) | $(BUILD)/pytest
 	$(HIL_PYTEST) tests/hil --ignore=tests/hil/test_scenarios.py tests/sim/test_canfdi_sim_can.py
 hil-test: hil-test-lockstep hil-test-bus
 

@@ -79,12 +79,10 @@ $(REPLAY_HIL_STAMP): tests/replay/record_hil.sh mk/replay.mk $(REPLAY_HIL_SCN) $
 # recording, the rest need none of it, so make -j (make test's TEST_JOBS)
 # runs them while it records.
 .PHONY: replay-test replay-test-sil replay-test-hil
-replay-test-sil: deps $(REPLAY_BIN) $(REPLAY_ASAN_BIN) $(BUILD)/bin/canfdi-sil
-	@mkdir -p $(BUILD)/pytest
-	$(PY) -m pytest tests/replay -q --ignore=tests/replay/test_replay_hil.py --basetemp=$(BUILD)/pytest/replay-sil
-replay-test-hil: deps $(REPLAY_BIN) $(REPLAY_ASAN_BIN) $(REPLAY_HIL_STAMP)
-	@mkdir -p $(BUILD)/pytest
-	$(PY) -m pytest tests/replay/test_replay_hil.py -q --basetemp=$(BUILD)/pytest/replay-hil
+replay-test-sil: deps $(REPLAY_BIN) $(REPLAY_ASAN_BIN) $(BUILD)/bin/canfdi-sil | $(BUILD)/pytest
+	$(PY) -m pytest $(PYTEST_OWN_TMP) tests/replay --ignore=tests/replay/test_replay_hil.py
+replay-test-hil: deps $(REPLAY_BIN) $(REPLAY_ASAN_BIN) $(REPLAY_HIL_STAMP) | $(BUILD)/pytest
+	$(PY) -m pytest $(PYTEST_OWN_TMP) tests/replay/test_replay_hil.py
 replay-test: replay-test-sil replay-test-hil
 
 TEST_STEPS += replay-test
