@@ -9,6 +9,7 @@
 #include "comm/gen/canfdi_msg.h"
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_qconst.h"
 
 /* Shorthands for the input supervision's verdicts of this step. */
 #define IN_VALID(app, i) canfdi_rx_valid(&(app)->rx, (unsigned)(i))
@@ -122,6 +123,18 @@ static void stage_vote(canfdi_app_t *app)
   (void)canfdi_vote_step(&app->vote, &vin, &app->vote_out);
 }
 
+/* A suspicion on the throttle's fast mechanical test (canfdi_app_test.h,
+ * Need): its friction deviation at or above half its threshold, or its
+ * spring deviation at or below half its negative one, the directions of
+ * the catalogue faults. Last step's diagnosis values. */
+static bool thr_suspect(const canfdi_app_t *app)
+{
+  const uint8_t thr = CANFDI_COMPONENT_THROTTLE;
+  const int32_t half = CANFDI_Q16_ONE / 2;
+  return (canfdi_diagnosis_value_q16(&app->diagnosis, thr, CANFDI_DIAG_CH_THR_FRICTION) >= half) ||
+         (canfdi_diagnosis_value_q16(&app->diagnosis, thr, CANFDI_DIAG_CH_THR_SPRING) <= -half);
+}
+
 /* Stage 3: both controllers, in the mode the manager set last step. TRACK
  * runs the controller (the manager's tracked value is the controller's own
  * output at a bridge switch, or 0 while the drive is held off). */
@@ -146,7 +159,7 @@ static void stage_test(canfdi_app_t *app)
   t.ref_q16 = IN_VAL(app, CANFDI_RX_IN_SP_THR_ANGLE);
   t.closed_loop = (m->thr_ctrl_mode != CANFDI_CTRL_OFF) && (m->thr_state == CANFDI_DEG_NORMAL);
   t.excited = app->thr.est_on && canfdi_est_thr_excited(&app->est_thr);
-  t.need = (rt != NULL) && rt->detected && rt->not_isolated &&
+  t.need = (rt != NULL) && ((rt->detected && rt->not_isolated) || thr_suspect(app)) &&
            !canfdi_diagnosis_corr_not_isolated(&app->diagnosis);
   t.unlearnt = app->thr.est_on && !canfdi_est_thr_el_converged(&app->est_thr);
   /* a component's first symptom: its estimator becomes alert (covariance

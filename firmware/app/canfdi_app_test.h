@@ -15,7 +15,19 @@
  *             limp-home band (the spring's kink) and from the stops.
  * Need: the plant's diagnosis shows a symptom it has not isolated yet (the
  * last step's result: the diagnosis runs after the controllers). For the
- * throttle not while the two sensors disagree (CORR, P2135's condition):
+ * throttle also a suspicion: the fast mechanical test's friction deviation
+ * at or above half its threshold, or its spring deviation at or below
+ * half its (negative) threshold, without a symptom yet. That test
+ * qualifies data only while the valve moves one way at 0.3 rad/s or more
+ * for 40 ms; a driver's slow sweep gives it a few updates after a fault's
+ * onset and then none for a second, and its deviation may stop short of
+ * the threshold. The burst's 2 Hz motion qualifies it, so a suspicion is
+ * confirmed or cleared within the parametric budget. Fault-free, in the
+ * SIL spread of canfdi_diagnosis.c, the friction deviation stays negative
+ * and the spring deviation above -4.8 % (half its threshold is -5 %); the
+ * driveability bench measures what the suspicions cost (docs/driving.md).
+ * The throttle has no need (symptom or suspicion) while the two sensors
+ * disagree (CORR, P2135's condition):
  * only a sensor drift moves CORR (dbc/diag_rules.csv), and the position
  * residuals that tell TPS1 from TPS2 compare the sensors with the model,
  * whose error a test burst raises; parameter evidence decides nothing

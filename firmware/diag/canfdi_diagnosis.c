@@ -997,6 +997,16 @@ int8_t canfdi_diagnosis_symptom(const canfdi_diagnosis_t *d, uint8_t component, 
   return s;
 }
 
+int32_t canfdi_diagnosis_value_q16(const canfdi_diagnosis_t *d, uint8_t component, uint8_t channel_idx)
+{
+  const uint8_t c = comp_of_catalogue(component);
+  int32_t x = 0;
+  if ((d != NULL) && d->initialised && (c < CANFDI_DIAG_N_COMP) && (channel_idx < CANFDI_DIAG_N_CH)) {
+    x = d->x_q16[c][channel_idx];
+  }
+  return x;
+}
+
 canfdi_diagnosis_diag_t canfdi_diagnosis_diag(const canfdi_diagnosis_t *d)
 {
   canfdi_diagnosis_diag_t g = {0};

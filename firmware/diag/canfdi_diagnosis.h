@@ -455,6 +455,12 @@ uint32_t canfdi_diagnosis_failed_mask(const canfdi_diagnosis_t *d);
  * arguments), for logs and tests. */
 int8_t canfdi_diagnosis_symptom(const canfdi_diagnosis_t *d, uint8_t component, uint8_t channel);
 
+/* The normalised value of a channel in the last step (1.0 = its threshold,
+ * Q16.16; 0 while the channel is invalid or for bad arguments): how close
+ * a symptom that has not crossed is, e.g. for a suspicion that only a test
+ * signal can confirm or clear (canfdi_app_test.h). */
+int32_t canfdi_diagnosis_value_q16(const canfdi_diagnosis_t *d, uint8_t component, uint8_t channel);
+
 /* Diagnostics snapshot (zero for NULL). */
 canfdi_diagnosis_diag_t canfdi_diagnosis_diag(const canfdi_diagnosis_t *d);
 

@@ -13,6 +13,7 @@
  */
 #include <check.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "diag/canfdi_diagnosis.h"
@@ -455,6 +456,32 @@ START_TEST(test_transient_burst)
   }
   ck_assert(canfdi_diagnosis_result(&dg, DCM)->detected);
   ck_assert_int_eq(canfdi_diagnosis_symptom(&dg, DCM, CANFDI_SYM_DCM_R1), CANFDI_DIAG_SYM_POS);
+}
+END_TEST
+
+/* canfdi_diagnosis_value_q16: the last step's normalised channel value,
+ * each side over its own threshold (friction +8 % / -30 %), 0 while the
+ * channel is invalid; what the application's test-signal suspicion reads
+ * (app/canfdi_app.c). */
+START_TEST(test_channel_value)
+{
+  canfdi_symptoms_t s;
+  const uint8_t fr = CANFDI_DIAG_CH_THR_FRICTION;
+  setup();
+  build(&s, &fault_free, 0.0, 0.0);
+  s.thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] = cfg.thr_par_pos_q16[CANFDI_SYM_THR_P_FRICTION] / 2;
+  canfdi_diagnosis_step(&dg, &s, rep);
+  ck_assert_int_le(abs(canfdi_diagnosis_value_q16(&dg, THR, fr) - Q16(0.5)), 16); /* 1 / threshold in Q16.16 */
+  ck_assert_int_eq(canfdi_diagnosis_symptom(&dg, THR, fr), CANFDI_DIAG_SYM_ZERO);
+  s.thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] = -cfg.thr_par_neg_q16[CANFDI_SYM_THR_P_FRICTION];
+  canfdi_diagnosis_step(&dg, &s, rep);
+  ck_assert_int_le(abs(canfdi_diagnosis_value_q16(&dg, THR, fr) + Q16(1.0)), 16);
+  s.thr_pdev_valid = (uint8_t)(s.thr_pdev_valid & ~(1U << CANFDI_SYM_THR_P_FRICTION));
+  canfdi_diagnosis_step(&dg, &s, rep);
+  ck_assert_int_eq(canfdi_diagnosis_value_q16(&dg, THR, fr), 0);
+  ck_assert_int_eq(canfdi_diagnosis_value_q16(NULL, THR, fr), 0);
+  ck_assert_int_eq(canfdi_diagnosis_value_q16(&dg, THR, CANFDI_DIAG_N_CH), 0);
+  ck_assert_int_eq(canfdi_diagnosis_value_q16(&dg, CANFDI_COMPONENT_COMM, 0U), 0);
 }
 END_TEST
 
@@ -991,6 +1018,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_invalid_input_not_tested);
   tcase_add_test(tc, test_noise_below_threshold);
   tcase_add_test(tc, test_transient_burst);
+  tcase_add_test(tc, test_channel_value);
   tcase_add_test(tc, test_cold_winding);
   suite_add_tcase(s, tc);
   tc = tcase_create("timing");
