@@ -123,16 +123,30 @@ static void stage_vote(canfdi_app_t *app)
   (void)canfdi_vote_step(&app->vote, &vin, &app->vote_out);
 }
 
-/* A suspicion on the throttle's fast mechanical test (canfdi_app_test.h,
- * Need): its friction deviation at or above half its threshold, or its
- * spring deviation at or below half its negative one, the directions of
- * the catalogue faults. Last step's diagnosis values. */
-static bool thr_suspect(const canfdi_app_t *app)
+/* A suspicion on the throttle's mechanics (canfdi_app_test.h, Need): the
+ * fast test's friction deviation at or above half its threshold, or its
+ * spring deviation at or below half its negative one (the directions of
+ * the catalogue faults), or both position residuals past a quarter of
+ * their bands with one sign for 50 consecutive steps (counted here, every
+ * step). Last step's diagnosis values. */
+static bool thr_suspect(canfdi_app_t *app)
 {
   const uint8_t thr = CANFDI_COMPONENT_THROTTLE;
   const int32_t half = CANFDI_Q16_ONE / 2;
+  const int32_t quarter = CANFDI_Q16_ONE / 4;
+  const int32_t p1 = canfdi_diagnosis_value_q16(&app->diagnosis, thr, CANFDI_SYM_THR_POS1);
+  const int32_t p2 = canfdi_diagnosis_value_q16(&app->diagnosis, thr, CANFDI_SYM_THR_POS2);
+  const bool lag = ((p1 >= quarter) && (p2 >= quarter)) || ((p1 <= -quarter) && (p2 <= -quarter));
+  if (!lag) {
+    app->fb.thr_pos_lag = 0U;
+  } else if (app->fb.thr_pos_lag < UINT16_MAX) {
+    app->fb.thr_pos_lag++;
+  } else {
+    /* saturated */
+  }
   return (canfdi_diagnosis_value_q16(&app->diagnosis, thr, CANFDI_DIAG_CH_THR_FRICTION) >= half) ||
-         (canfdi_diagnosis_value_q16(&app->diagnosis, thr, CANFDI_DIAG_CH_THR_SPRING) <= -half);
+         (canfdi_diagnosis_value_q16(&app->diagnosis, thr, CANFDI_DIAG_CH_THR_SPRING) <= -half) ||
+         (app->fb.thr_pos_lag >= 50U);
 }
 
 /* Stage 3: both controllers, in the mode the manager set last step. TRACK
@@ -149,6 +163,7 @@ static void stage_test(canfdi_app_t *app)
   canfdi_app_test_in_t t;
   bool dcm_on;
   bool thr_on;
+  const bool suspect = thr_suspect(app);
   d.ref_usable = IN_USABLE(app, CANFDI_RX_IN_SP_DCM_SPEED);
   d.ref_q16 = IN_VAL(app, CANFDI_RX_IN_SP_DCM_SPEED);
   d.closed_loop = (m->dcm_ctrl_mode != CANFDI_CTRL_OFF) && (m->dcm_state == CANFDI_DEG_NORMAL);
@@ -159,7 +174,7 @@ static void stage_test(canfdi_app_t *app)
   t.ref_q16 = IN_VAL(app, CANFDI_RX_IN_SP_THR_ANGLE);
   t.closed_loop = (m->thr_ctrl_mode != CANFDI_CTRL_OFF) && (m->thr_state == CANFDI_DEG_NORMAL);
   t.excited = app->thr.est_on && canfdi_est_thr_excited(&app->est_thr);
-  t.need = (rt != NULL) && ((rt->detected && rt->not_isolated) || thr_suspect(app)) &&
+  t.need = (rt != NULL) && ((rt->detected && rt->not_isolated) || suspect) &&
            !canfdi_diagnosis_corr_not_isolated(&app->diagnosis);
   t.unlearnt = app->thr.est_on && !canfdi_est_thr_el_converged(&app->est_thr);
   /* a component's first symptom: its estimator becomes alert (covariance

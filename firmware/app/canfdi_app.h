@@ -231,6 +231,9 @@ typedef struct {
   bool thr_no_current;     /* throttle motor draws no current: its estimator is not fed */
   bool dcm_detected;       /* the diagnosis showed a DC-motor symptom */
   bool thr_detected;       /* ... a throttle symptom */
+  uint16_t thr_pos_lag;    /* steps both position residuals stayed past a
+                            * quarter of their bands with one sign
+                            * (saturating): the valve lags or leads the model */
 } canfdi_app_fb_t;
 
 /* Which plant's models run and learn; state, not counters. */

@@ -24,8 +24,13 @@
  * the threshold. The burst's 2 Hz motion qualifies it, so a suspicion is
  * confirmed or cleared within the parametric budget. Fault-free, in the
  * SIL spread of canfdi_diagnosis.c, the friction deviation stays negative
- * and the spring deviation above -4.8 % (half its threshold is -5 %); the
- * driveability bench measures what the suspicions cost (docs/driving.md).
+ * and the spring deviation above -4.8 % (half its threshold is -5 %).
+ * Where the valve sticks at the onset it may never hold that motion, and
+ * the test gets no update at all; the valve then lags (or leads) the
+ * model: both position residuals past a quarter of their bands with one
+ * sign for 50 consecutive steps are a suspicion too (fault-free, the
+ * 11.5-minute drive never held that for 50 ms). The driveability bench
+ * measures what the suspicions cost (docs/driving.md).
  * The throttle has no need (symptom or suspicion) while the two sensors
  * disagree (CORR, P2135's condition):
  * only a sensor drift moves CORR (dbc/diag_rules.csv), and the position
