@@ -82,7 +82,10 @@ CUTS = (0.4, 2.2)
 # matches before r1 and Psi have grown (the recorded ECU, learnt before
 # the fault, names P1A11 at 3.96 s). Matching in every step, the same
 # replay named P1A11; holding the rules for the settling time instead
-# names friction later and makes four other cuts wrong.
+# names friction later and makes four other cuts wrong; forgetting the
+# isolation and clearing the model codes at the end of the settling time
+# leaves the settled estimates (Psi -9 %, J -11 %, M_c -6 %) naming
+# friction again at 10.5 s, when the speed passes zero.
 KNOWN_WRONG: dict[tuple[str, float], str] = {("dcm_flux_down_incipient_reversing", 2.2): "P1A12"}
 
 
