@@ -45,7 +45,9 @@ static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, 
   canfdi_parity_dcm_coef_t c = {0, 0U};
   if ((num != 0) && (den > 0)) {
     const bool neg = (num < 0);
-    uint64_t a = neg ? ((uint64_t)0U - (uint64_t)num) : (uint64_t)num;
+    /* |num| without unsigned wrap-around: -(num + 1) fits int64 for every
+     * num < 0 (INT64_MIN included) */
+    uint64_t a = neg ? ((uint64_t)(-(num + 1)) + 1U) : (uint64_t)num;
     uint64_t b = (uint64_t)den;
     const uint64_t top = (uint64_t)1U << 61;
     int32_t e = (int32_t)num_frac - (int32_t)den_frac; /* f = 30 + e after normalisation */
