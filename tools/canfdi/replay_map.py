@@ -43,6 +43,7 @@ frame is reported with its number.
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 import re
@@ -53,7 +54,6 @@ from typing import Any, Iterator, TextIO
 import cantools
 from cantools.database.can import Database
 
-from . import DBC_PATH
 from .e2e import protect, protected_ids
 from .replay_input import PlacedWriter, Problems, candump_line, numbered_messages
 from .timeline import load_db
@@ -98,6 +98,15 @@ class _FrameState:
     counter: int = 0
 
 
+@functools.lru_cache(maxsize=8)
+def _load_dbc(path: Path, mtime_ns: int, size: int) -> object:
+    """The other bus's DBC, parsed once while the file is unchanged (its time stamp and size are
+    part of the key). The databases are only read (decode, look-ups), never changed, so one parse
+    can serve every map that names the file."""
+    del mtime_ns, size  # the cache key only
+    return cantools.database.load_file(str(path))
+
+
 class Mapper:
     """A loaded map: writes a log of the other bus as candump text of the supervisor's frames."""
 
@@ -106,7 +115,7 @@ class Mapper:
         self.other = other
         self.other_path = other_path
         self.mappings = mappings
-        self.db = cantools.database.load_file(str(DBC_PATH))
+        self.db = load_db()
         self.frames: dict[str, _FrameState] = {}
         for m in mappings:
             self.frames.setdefault(m.frame, _FrameState(m.frame)).mappings.append(m)
@@ -128,8 +137,7 @@ class Mapper:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as e:
             raise MapError(f"{path}: cannot read the map: {e}") from e
-        ours = cantools.database.load_file(str(DBC_PATH))
-        assert isinstance(ours, Database)
+        ours = load_db()
         dbc_path: Path | None = None
         mappings: list[Mapping] = []
         seen: dict[str, int] = {}
@@ -154,7 +162,8 @@ class Mapper:
         if dbc_path is None:
             raise MapError(f"{path}: no 'dbc = FILE' line: the other bus's database is needed")
         try:
-            other = cantools.database.load_file(str(dbc_path))
+            st = dbc_path.stat()
+            other = _load_dbc(dbc_path, st.st_mtime_ns, st.st_size)
         except Exception as e:  # noqa: BLE001 — any DBC error becomes a message with the file
             raise MapError(f"{path}: cannot load the other DBC {dbc_path}: {e}") from e
         if not isinstance(other, Database):
