@@ -72,21 +72,9 @@ CUTS = (0.4, 2.2)
 
 
 # Known wrong findings of a mid-drive replay, kept as failing cases until
-# the firmware is right there: (scenario stem, cut) -> the wrong code
-# (README, "Learning before judging").
-# dcm_flux_down_incipient_reversing cut at 2.2 s: the flux loss ramps from
-# 3 s while the speed falls through zero towards the reversal; the
-# replayed estimators, learning since the cut, converge (4.3 s) with part
-# of the loss in the friction estimate (M_c +10 %, Psi -3 %), and the
-# model rules, matched every 10 ms, see friction win on consecutive
-# matches before r1 and Psi have grown (the recorded ECU, learnt before
-# the fault, names P1A11 at 3.96 s). Matching in every step, the same
-# replay named P1A11; holding the rules for the settling time instead
-# names friction later and makes four other cuts wrong; forgetting the
-# isolation and clearing the model codes at the end of the settling time
-# leaves the settled estimates (Psi -9 %, J -11 %, M_c -6 %) naming
-# friction again at 10.5 s, when the speed passes zero.
-KNOWN_WRONG: dict[tuple[str, float], str] = {("dcm_flux_down_incipient_reversing", 2.2): "P1A12"}
+# the firmware or the replay is right there: (scenario stem, cut) -> the
+# wrong code (README, "Learning before judging"). None today.
+KNOWN_WRONG: dict[tuple[str, float], str] = {}
 
 
 def test_mid_drive_cut_finds_the_same_codes_after_settling(sil_logs: dict[Path, Path], tmp_path: Path) -> None:
@@ -152,6 +140,26 @@ def test_unlearnt_estimates_leave_the_models_unjudged(sil_logs: dict[Path, Path]
     assert "not converged" in last["why"] and last["to_s"] == pytest.approx(doc["logs"][0]["last_s"], abs=0.01)
     p1a11 = next(r for r in doc["recorded_ecu_only"] if r["code"] == "P1A11")
     assert not p1a11["judged"]
+
+
+def test_fault_learnt_into_the_models_leaves_them_unjudged(sil_logs: dict[Path, Path], tmp_path: Path) -> None:
+    """A cut 0.8 s before a ramped flux loss on the reversing sine: the parity equations' R_A and
+    the estimates are learnt from the log while the loss ramps in (R_A takes it, r1 reads zero:
+    the friction pattern). r2 and r3, which hold no R_A, show it when the DC motor becomes learnt,
+    so its models stay not judged to the end with that reason: no friction (P1A12) or other model
+    code, and the recorded ECU's P1A11 listed as not judged. The uncut log still names P1A11."""
+    log = next(v for k, v in sil_logs.items() if k.stem == "dcm_flux_down_incipient_reversing")
+    rc, doc, out, _ = run_replay([str(cut_log(log, tmp_path / "cut.log", 2.2))], tmp_path)
+    assert doc is not None
+    assert [f["code"] for f in doc["dtcs"]] == []
+    dcm = next(n for n in doc["not_judged"] if n["monitor"] == "dcm_models")
+    last = dcm["spans"][-1]
+    assert "learnt into them" in last["why"] and last["to_s"] == pytest.approx(doc["logs"][0]["last_s"], abs=0.01)
+    p1a11 = next(r for r in doc["recorded_ecu_only"] if r["code"] == "P1A11")
+    assert not p1a11["judged"]
+    _, whole, _, _ = run_replay([str(log)], tmp_path)
+    assert whole is not None and "P1A11" in [f["code"] for f in whole["dtcs"]]
+    assert not any("learnt into them" in s["why"] for n in whole["not_judged"] for s in n["spans"])
 
 
 def test_ecu_side_actions_are_not_on_the_bus(tmp_path: Path) -> None:
