@@ -362,7 +362,17 @@ static void stage_diagnose(canfdi_app_t *app)
   si.dcm_est_restart = app->dcm.est_restart;
   app->dcm.learnt = app->dcm.learnt ||
                     (canfdi_est_dcm_arm_converged(&app->est_dcm) && canfdi_est_dcm_mech_converged(&app->est_dcm));
-  si.dcm_learnt = app->dcm.learnt;
+  if (app->dcm.learnt && (app->dcm.learn_check == CANFDI_APP_LEARN_PENDING) &&
+      ((canfdi_parity_dcm_out(&app->parity_dcm)->valid & (1U << CANFDI_SYM_DCM_R1)) != 0U)) {
+    /* the learning check (canfdi_app.h), on the symptoms of the last run */
+    const int8_t s2 = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R2);
+    const int8_t s3 = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R3);
+    app->dcm.learn_check = ((s2 == CANFDI_DIAG_SYM_POS) || (s2 == CANFDI_DIAG_SYM_NEG) ||
+                            (s3 == CANFDI_DIAG_SYM_POS) || (s3 == CANFDI_DIAG_SYM_NEG))
+                               ? CANFDI_APP_LEARN_FAULT
+                               : CANFDI_APP_LEARN_CLEAN;
+  }
+  si.dcm_learnt = app->dcm.learnt && (app->dcm.learn_check != CANFDI_APP_LEARN_FAULT);
   si.dcm_rearm = app->dcm.rearm > 0U;
   si.thr_rearm = app->thr.rearm > 0U;
   si.thr_est_on = app->thr.est_on;

@@ -155,7 +155,8 @@ typedef struct {
   bool thr_est_on;                 /* the throttle estimator was fed this step */
   bool dcm_est_restart;            /* the DC-motor estimator's covariance was
                                     * boosted or reset this step */
-  bool dcm_learnt;                 /* canfdi_app_gate_t.learnt of the DC motor */
+  bool dcm_learnt;                 /* canfdi_app_gate_t.learnt of the DC motor,
+                                    * and its learning check not failed */
   bool dcm_rearm;                  /* canfdi_app_gate_t.rearm > 0, DC motor ... */
   bool thr_rearm;                  /* ... and throttle */
   int32_t load_known_Nm_q16;       /* the load the models assume this step */

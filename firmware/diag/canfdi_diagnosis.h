@@ -122,7 +122,10 @@
  *    armature estimate alone, an I_A offset (P1A20). A later restart that
  *    keeps the estimates (an input timeout or a sensor fault healed) does
  *    not clear it: a sensor fault whose symptom pauses the learning must
- *    stay isolable.
+ *    stay isolable. The application also keeps the flag set for the
+ *    power cycle when r2 or r3 showed a symptom as the DC motor became
+ *    learnt: the fault was then learnt into R_A and the estimates
+ *    (canfdi_app.h, CANFDI_APP_LEARN_FAULT).
  *  - Re-arming (both components). While CANFDI_SYM_F_DCM_REARM or
  *    _THR_REARM is set (the component's inputs came back from an
  *    interruption, or one of its samples was late, less than the

@@ -68,9 +68,10 @@
                                                    * can give it (app/canfdi_app_sym.c) */
 #define CANFDI_SYM_F_DCM_UNLEARNT (1UL << 17)     /* the armature and the mechanical
                                                    * estimates have not both converged
-                                                   * since power-up: the DC motor's
-                                                   * model rules are not tested
-                                                   * (canfdi_diagnosis.h) */
+                                                   * since power-up, or a fault was
+                                                   * learnt into them (canfdi_app.h):
+                                                   * the DC motor's model rules are
+                                                   * not tested (canfdi_diagnosis.h) */
 #define CANFDI_SYM_F_DCM_REARM (1UL << 18)        /* the DC motor's inputs came back
                                                    * from an interruption (a timeout,
                                                    * a rejected frame or sample) or

@@ -304,7 +304,7 @@ static const char *const why_text[N_WHY] = {
     "the DC motor's estimates (R_A, Psi, J, friction) have not converged since the start: too little "
     "excitation in the recording so far",
     "the DC motor's residuals without R_A (r2, r3) showed a fault when its estimates and the parity "
-    "equations' R_A had been learnt from the log (it starts mid-drive): the fault may be learnt into them",
+    "equations' R_A had been learnt: the fault may be learnt into them (to the end of the power cycle)",
     "re-arming: the DC-motor inputs came back from an interruption (rejected frames or values, a "
     "timeout) or a DcmSensor frame was late, less than the calibration's hold time ago",
     "re-arming: the throttle inputs came back from an interruption (rejected frames or values, a "
@@ -394,8 +394,6 @@ typedef struct {
   /* monitors */
   uint8_t mon_why[N_MON];
   bool mon_init;
-  bool dcm_tainted;    /* mid-drive: r2/r3 symptoms when the DC motor became learnt */
-  bool dcm_was_learnt; /* app.dcm.learnt in the last step */
   mon_buf_t mon_buf[PU_MAX_STEPS];
   unsigned n_mon_buf;
   /* gaps */
@@ -780,7 +778,7 @@ static void monitor_whys(bool dcm_cmd_known, bool thr_cmd_known, bool power_up, 
                       : !dcm_rx ? WHY_DCM_FRAME
                       : !dcm_in ? WHY_DCM_INPUTS
                       : !a->dcm.learnt ? WHY_DCM_UNLEARNT
-                      : (!power_up && rp.dcm_tainted) ? WHY_DCM_TAINTED
+                      : (a->dcm.learn_check == CANFDI_APP_LEARN_FAULT) ? WHY_DCM_TAINTED
                       : (a->dcm.rearm > 0U) ? WHY_DCM_REARM
                                 : WHY_NONE;
   w[MON_DCM_CMD] = (w[MON_DCM_MODELS] != WHY_NONE) ? w[MON_DCM_MODELS] : (!dcm_cmd_known ? WHY_DCM_CMD : WHY_NONE);
@@ -832,22 +830,6 @@ static void flush_monitors(void)
 
 static void eval_monitors(bool dcm_cmd_known, bool thr_cmd_known)
 {
-  if (rp.app.dcm.learnt && !rp.dcm_was_learnt) {
-    /* The step the DC motor becomes learnt, which is also when the parity
-     * equations' fast R_A learning after a start ends (about 2 s each): r2
-     * and r3 hold no R_A, so a symptom on them now means the plant was
-     * faulty inside the window R_A and the estimates were learnt from, and
-     * the fault may be learnt into them (a flux loss ramping in makes R_A
-     * absorb -dPsi w / I, and r1 then reads zero: the friction pattern).
-     * A log that starts at power-up is judged like the ECU was. */
-    const int8_t s2 =
-        canfdi_diagnosis_symptom(&rp.app.diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R2);
-    const int8_t s3 =
-        canfdi_diagnosis_symptom(&rp.app.diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R3);
-    rp.dcm_tainted = (s2 == CANFDI_DIAG_SYM_POS) || (s2 == CANFDI_DIAG_SYM_NEG) || (s3 == CANFDI_DIAG_SYM_POS) ||
-                     (s3 == CANFDI_DIAG_SYM_NEG);
-  }
-  rp.dcm_was_learnt = rp.app.dcm.learnt;
   if (rp.start_decided && (rp.n_mon_buf > 0U)) {
     flush_monitors();
   }
@@ -1790,8 +1772,6 @@ static void reset_file_state(int index, const char *name)
   rp.rec_ecu_frames = 0U;
   rp.mismatch_reported = false;
   rp.mon_init = false;
-  rp.dcm_tainted = false;
-  rp.dcm_was_learnt = false;
   rp.n_mon_buf = 0U;
   rp.gaps = 0U;
   memset(rp.dtc_seen_rep, 0, sizeof rp.dtc_seen_rep);
