@@ -11,6 +11,10 @@
 #define PTHR_W_MAX_Q32 ((int64_t)2000 << 32)
 /* theta_arm follows the TPS mean with 1/2^8 per step while they agree. */
 #define PTHR_LEAK_SHIFT 8U
+/* Steps with the bridge off before a valve at rest is taken to be at the
+ * limp-home angle (the header, coasting): 0.5 s, the return from full
+ * travel (about 0.3 s for the default valve) with a margin. */
+#define PTHR_LH_SETTLE_STEPS 500U
 
 /* ------------------------------------------------------------------------ */
 /* Small helpers                                                            */
@@ -261,6 +265,8 @@ void canfdi_parity_thr_reset(canfdi_parity_thr_t *p)
     p->cand = CANFDI_PARITY_THR_SRC_NONE;
     p->cand_n = 0U;
     p->in_band_n = 0U;
+    p->off_n = 0U;
+    p->unref = true;
     for (k = 0U; k < CANFDI_PARITY_THR_N_RES; k++) {
       canfdi_adapt_reset(&p->thr[k]);
       p->out.r_q16[k] = 0;
@@ -268,6 +274,7 @@ void canfdi_parity_thr_reset(canfdi_parity_thr_t *p)
       p->out.thr_q16[k] = canfdi_adapt_threshold(&p->thr[k]);
     }
     p->out.valid = 0U;
+    p->out.no_ref = false;
     p->out.exceed = 0U;
     p->out.src = p->src;
     p->out.theta_hat_rad_q16 = p->cfg->limp_home_rad_q16;
@@ -369,6 +376,7 @@ static uint8_t pthr_source(canfdi_parity_thr_t *p, bool ok1, bool ok2, int32_t c
     src = ok1 ? CANFDI_PARITY_THR_SRC_TPS1 : CANFDI_PARITY_THR_SRC_TPS2;
   } else if (!canfdi_adapt_exceeds(&p->thr[CANFDI_PARITY_THR_CORR], corr_q16)) {
     p->in_band_n = (p->in_band_n < UINT16_MAX) ? (uint16_t)(p->in_band_n + 1U) : p->in_band_n;
+    p->unref = false; /* the sensors agree: the observer tracks them */
     if ((src != CANFDI_PARITY_THR_SRC_MEAN) && (p->in_band_n >= c->release_steps)) {
       src = CANFDI_PARITY_THR_SRC_MEAN;
       canfdi_count_inc(&p->diag.releases);
@@ -387,11 +395,12 @@ static uint8_t pthr_source(canfdi_parity_thr_t *p, bool ok1, bool ok2, int32_t c
       const int32_t a1 = pthr_abs(p->out.r_q16[CANFDI_PARITY_THR_POS1]);
       const int32_t a2 = pthr_abs(p->out.r_q16[CANFDI_PARITY_THR_POS2]);
       const int64_t ratio = (int64_t)c->select_ratio;
-      const bool rest = (pthr_abs(rate_q16) <= c->rest_w_rad_s_q16);
+      /* at rest, and with an angle of the observer's own (unref) */
+      const bool decide = !p->unref && (pthr_abs(rate_q16) <= c->rest_w_rad_s_q16);
       uint8_t cand = CANFDI_PARITY_THR_SRC_NONE;
-      if (rest && ((int64_t)a1 > ratio * a2) && (a1 > p->out.thr_q16[CANFDI_PARITY_THR_POS1])) {
+      if (decide && ((int64_t)a1 > ratio * a2) && (a1 > p->out.thr_q16[CANFDI_PARITY_THR_POS1])) {
         cand = CANFDI_PARITY_THR_SRC_TPS2;
-      } else if (rest && ((int64_t)a2 > ratio * a1) &&
+      } else if (decide && ((int64_t)a2 > ratio * a1) &&
                  (a2 > p->out.thr_q16[CANFDI_PARITY_THR_POS2])) {
         cand = CANFDI_PARITY_THR_SRC_TPS1;
       } else {
@@ -600,11 +609,20 @@ static void pthr_observe(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *i
     th_p = pthr_clamp64(th_p, canfdi_sub_s64_sat(p->th_arm_q32, half_q32),
                         canfdi_add_s64_sat(p->th_arm_q32, half_q32));
   } else if ((s->src == CANFDI_PARITY_THR_SRC_NONE) && (s->ok1 || s->ok2) && !emf_ok) {
-    /* Coasting without the back-EMF speed (current clipped in a fast
-     * stroke, or bridge off): the mechanical model alone is poor there,
-     * whereas a sensor offset, even a drifting one, barely changes within
-     * a few steps: follow the jump-robust sensor increment instead. */
-    th_p = canfdi_add_s64_sat(p->th_hat_q32, s->inc_q32);
+    if ((p->off_n >= PTHR_LH_SETTLE_STEPS) && (c->pretension_Nm_q24 > c->friction_Nm_q24) &&
+        (pthr_abs(rate) <= c->rest_w_rad_s_q16)) {
+      /* De-energised and at rest: the pretension holds the valve at the
+       * limp-home angle (the header, coasting). */
+      th_p = (int64_t)c->limp_home_rad_q16 * 65536;
+      w_p = 0;
+      p->unref = false;
+    } else {
+      /* Coasting without the back-EMF speed (current clipped in a fast
+       * stroke, or bridge off): the mechanical model alone is poor there,
+       * whereas a sensor offset, even a drifting one, barely changes
+       * within a few steps: follow the jump-robust sensor increment. */
+      th_p = canfdi_add_s64_sat(p->th_hat_q32, s->inc_q32);
+    }
   } else {
     /* the model's prediction */
   }
@@ -689,6 +707,7 @@ static uint8_t pthr_validity(canfdi_parity_thr_t *p, const pthr_step_t *s)
     valid |= (uint8_t)(s->ok1 ? (1U << CANFDI_PARITY_THR_POS1) : 0U);
     valid |= (uint8_t)(s->ok2 ? (1U << CANFDI_PARITY_THR_POS2) : 0U);
   }
+  p->out.no_ref = p->unref && s->ok1 && s->ok2;
   return valid;
 }
 
@@ -726,6 +745,7 @@ static void pthr_remember(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *
   p->th2_prev_q16 = s->th2;
   p->ok_prev = s->ok;
   p->en_prev = in->enabled;
+  p->off_n = in->enabled ? 0U : ((p->off_n < UINT16_MAX) ? (uint16_t)(p->off_n + 1U) : p->off_n);
 }
 
 const canfdi_parity_thr_out_t *canfdi_parity_thr_step(canfdi_parity_thr_t *p,

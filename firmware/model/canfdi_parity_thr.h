@@ -87,7 +87,27 @@
  *              bridge off) the coasting observer follows the jump-robust
  *              sensor increment instead of the mechanical model, which is
  *              poor there; an offset, even a drifting one, barely changes
- *              within those few steps. Measured coasting drift with the
+ *              within those few steps. One absolute angle is known: with
+ *              the bridge off the return spring's pretension, larger than
+ *              the Coulomb friction, leaves the valve at rest only within
+ *              a fraction of lh_width of the limp-home angle (the default
+ *              valve: 0.396 against 0.284 N m, so within 0.09 deg; it
+ *              returns from full travel in about 0.3 s). So once the
+ *              bridge has been off for PTHR_LH_SETTLE_STEPS and the valve
+ *              is at rest (rest_w), the coasting observer is set to
+ *              theta_LH: a disagreement present from power-up (the
+ *              manager de-energises the valve while it is not isolated)
+ *              or one that outlasted the coast is then decided by the
+ *              sensor that reads the limp-home angle. Not with a
+ *              configured pretension at or below the friction.
+ *              A disagreement present from the first sample after init or
+ *              reset leaves the observer at the sensors' mean with nothing
+ *              from before it: coasting from there, the model's error
+ *              alone would pick a sensor (a 0.05 V TPS1 drift from power-up
+ *              was taken for TPS2 on three seeds of three). No sensor is
+ *              trusted then until the observer has an angle of its own:
+ *              the correlation was in band once, or the limp-home angle
+ *              was taken. Measured coasting drift with the
  *              test plant: ~5 mrad over 20 s of 20-deg strokes every 0.5 s;
  *        TPS1 / TPS2  once, while coasting, one position residual is more
  *              than select_ratio (4) times the other and above its band,
@@ -313,6 +333,12 @@ typedef struct {
   uint8_t valid;
   uint8_t exceed;
   uint8_t src;                 /* CANFDI_PARITY_THR_SRC_* in use */
+  bool no_ref;                 /* both sensors in range, and the observer
+                                * has no angle of its own (unref): POS1 and
+                                * POS2 say nothing about which sensor is
+                                * wrong (its own drift would pick one); the
+                                * vote still takes the observer's angle as
+                                * the third opinion */
   int32_t theta_hat_rad_q16;   /* observer angle */
   int32_t omega_hat_rad_s_q16; /* observer speed */
   int32_t theta1_rad_q16;      /* angles from TPS1, TPS2 */
@@ -366,11 +392,16 @@ typedef struct {
                            * saturating at UINT16_MAX */
   uint16_t in_band_n;     /* consecutive steps CORR was inside its band,
                            * saturating at UINT16_MAX */
+  uint16_t off_n;         /* consecutive steps with the bridge off,
+                           * saturating at UINT16_MAX */
   uint8_t ok_prev;
   uint8_t src;
   uint8_t cand;
   bool en_prev;
   bool primed;
+  bool unref;             /* the observer holds no angle of its own yet:
+                           * the sensors have disagreed since the start
+                           * (coasting, below) */
   canfdi_parity_thr_out_t out;
   canfdi_parity_thr_diag_t diag;
 } canfdi_parity_thr_t;
