@@ -12,9 +12,12 @@
 /* theta_arm follows the TPS mean with 1/2^8 per step while they agree. */
 #define PTHR_LEAK_SHIFT 8U
 /* Steps with the bridge off before a valve at rest is taken to be at the
- * limp-home angle (the header, coasting): 0.5 s, the return from full
- * travel (about 0.3 s for the default valve) with a margin. */
-#define PTHR_LH_SETTLE_STEPS 500U
+ * limp-home angle (the header, coasting): 0.1 s. The rest condition does
+ * the rest: a returning valve is moving (the default one returns from full
+ * travel in about 0.3 s), and it stops only at the limp-home angle. Short,
+ * so that the sensor is trusted before the correlation code's persistence
+ * (0.5 s, P2135) runs out. */
+#define PTHR_LH_SETTLE_STEPS 100U
 
 /* ------------------------------------------------------------------------ */
 /* Small helpers                                                            */
@@ -376,7 +379,9 @@ static uint8_t pthr_source(canfdi_parity_thr_t *p, bool ok1, bool ok2, int32_t c
     src = ok1 ? CANFDI_PARITY_THR_SRC_TPS1 : CANFDI_PARITY_THR_SRC_TPS2;
   } else if (!canfdi_adapt_exceeds(&p->thr[CANFDI_PARITY_THR_CORR], corr_q16)) {
     p->in_band_n = (p->in_band_n < UINT16_MAX) ? (uint16_t)(p->in_band_n + 1U) : p->in_band_n;
-    p->unref = false; /* the sensors agree: the observer tracks them */
+    if (pthr_abs(corr_q16) <= c->band[CANFDI_PARITY_THR_CORR].base) {
+      p->unref = false; /* the sensors agree: the observer tracks them */
+    }
     if ((src != CANFDI_PARITY_THR_SRC_MEAN) && (p->in_band_n >= c->release_steps)) {
       src = CANFDI_PARITY_THR_SRC_MEAN;
       canfdi_count_inc(&p->diag.releases);

@@ -93,7 +93,7 @@
  *              a fraction of lh_width of the limp-home angle (the default
  *              valve: 0.396 against 0.284 N m, so within 0.09 deg; it
  *              returns from full travel in about 0.3 s). So once the
- *              bridge has been off for PTHR_LH_SETTLE_STEPS and the valve
+ *              bridge has been off for PTHR_LH_SETTLE_STEPS (0.1 s) and the valve
  *              is at rest (rest_w), the coasting observer is set to
  *              theta_LH: a disagreement present from power-up (the
  *              manager de-energises the valve while it is not isolated)
@@ -106,8 +106,9 @@
  *              alone would pick a sensor (a 0.05 V TPS1 drift from power-up
  *              was taken for TPS2 on three seeds of three). No sensor is
  *              trusted then until the observer has an angle of its own:
- *              the correlation was in band once, or the limp-home angle
- *              was taken. Measured coasting drift with the
+ *              the correlation was within its base band once (the band
+ *              widens with the valve's motion, and a small disagreement
+ *              fits a widened one), or the limp-home angle was taken. Measured coasting drift with the
  *              test plant: ~5 mrad over 20 s of 20-deg strokes every 0.5 s;
  *        TPS1 / TPS2  once, while coasting, one position residual is more
  *              than select_ratio (4) times the other and above its band,
