@@ -120,6 +120,7 @@ static void stage_vote(canfdi_app_t *app)
   vin.model_rad_q16 = (po != NULL) ? po->theta_hat_rad_q16 : 0;
   vin.model_valid = (po != NULL) && ((po->valid & pos_bits) != 0U) && !app->fb.thr_arm_symptom &&
                     thr_cmd_known(app);
+  vin.model_no_blame = (po != NULL) && po->no_ref;
   (void)canfdi_vote_step(&app->vote, &vin, &app->vote_out);
 }
 
@@ -362,17 +363,23 @@ static void stage_diagnose(canfdi_app_t *app)
   si.dcm_est_restart = app->dcm.est_restart;
   app->dcm.learnt = app->dcm.learnt ||
                     (canfdi_est_dcm_arm_converged(&app->est_dcm) && canfdi_est_dcm_mech_converged(&app->est_dcm));
-  if (app->dcm.learnt && (app->dcm.learn_check == CANFDI_APP_LEARN_PENDING) &&
-      ((canfdi_parity_dcm_out(&app->parity_dcm)->valid & (1U << CANFDI_SYM_DCM_R1)) != 0U)) {
+  if (app->dcm.learn_check == CANFDI_APP_LEARN_PENDING) {
     /* the learning check (canfdi_app.h), on the symptoms of the last run */
     const int8_t s2 = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R2);
     const int8_t s3 = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R3);
-    app->dcm.learn_check = ((s2 == CANFDI_DIAG_SYM_POS) || (s2 == CANFDI_DIAG_SYM_NEG) ||
-                            (s3 == CANFDI_DIAG_SYM_POS) || (s3 == CANFDI_DIAG_SYM_NEG))
-                               ? CANFDI_APP_LEARN_FAULT
-                               : CANFDI_APP_LEARN_CLEAN;
+    const bool seen = (s2 != CANFDI_DIAG_SYM_UNKNOWN) || (s3 != CANFDI_DIAG_SYM_UNKNOWN);
+    app->dcm.learn_seen = !seen ? 0U : ((app->dcm.learn_seen < UINT8_MAX) ? (uint8_t)(app->dcm.learn_seen + 1U)
+                                                                          : app->dcm.learn_seen);
+    const uint16_t need = (app->cal.diagnosis.sym_on_steps < UINT8_MAX) ? app->cal.diagnosis.sym_on_steps : UINT8_MAX;
+    if (app->dcm.learnt && (app->dcm.learn_seen >= need) &&
+        ((canfdi_parity_dcm_out(&app->parity_dcm)->valid & (1U << CANFDI_PARITY_DCM_R1)) != 0U)) {
+      app->dcm.learn_check = ((s2 == CANFDI_DIAG_SYM_POS) || (s2 == CANFDI_DIAG_SYM_NEG) ||
+                              (s3 == CANFDI_DIAG_SYM_POS) || (s3 == CANFDI_DIAG_SYM_NEG))
+                                 ? CANFDI_APP_LEARN_FAULT
+                                 : CANFDI_APP_LEARN_CLEAN;
+    }
   }
-  si.dcm_learnt = app->dcm.learnt && (app->dcm.learn_check != CANFDI_APP_LEARN_FAULT);
+  si.dcm_learnt = app->dcm.learnt && (app->dcm.learn_check == CANFDI_APP_LEARN_CLEAN);
   si.dcm_rearm = app->dcm.rearm > 0U;
   si.thr_rearm = app->thr.rearm > 0U;
   si.thr_est_on = app->thr.est_on;

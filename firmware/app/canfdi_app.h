@@ -238,17 +238,20 @@ typedef struct {
 
 /* The DC motor's check of what it has learnt, made once per power cycle at
  * the first step that is learnt with r1 valid again (R_A's fast learning
- * after power-up has ended, canfdi_parity_dcm.h): r2 and r3 hold no R_A (r3
- * only in current swings), so a symptom on either there means the plant
- * was faulty in the window R_A and the estimates were learnt from. The
- * fault is then in them: an I_A offset or a flux loss moves the learnt R_A
- * by -R dI / I or -dPsi w / I and r1 reads zero, the pattern of a friction
- * rise, which at one operating point no measurement separates from them.
- * The model rules stay untested for the rest of the power cycle
- * (CANFDI_SYM_F_DCM_UNLEARNT): not tested, never guessed. */
-#define CANFDI_APP_LEARN_PENDING 0U /* not learnt, or r1 not valid yet */
-#define CANFDI_APP_LEARN_CLEAN 1U   /* checked: r2 and r3 quiet */
-#define CANFDI_APP_LEARN_FAULT 2U   /* checked: a fault was learnt in */
+ * after power-up has ended, canfdi_parity_dcm.h) and r2 or r3 evaluated
+ * for at least the diagnosis' sym_on_steps (a channel that has just become
+ * valid reads 0 until then): r2 and r3 hold no R_A (r3 only in current
+ * swings), so a symptom on either there means the plant was faulty in the
+ * window R_A and the estimates were learnt from. The fault is then in
+ * them: an I_A offset or a flux loss moves the learnt R_A by -R dI / I or
+ * -dPsi w / I and r1 reads zero, the pattern of a friction rise, which at
+ * one operating point no measurement separates from them. Until the check
+ * is made, and for the rest of the power cycle once it found a fault, the
+ * model rules are not tested (CANFDI_SYM_F_DCM_UNLEARNT): not tested,
+ * never guessed. */
+#define CANFDI_APP_LEARN_PENDING 0U /* not made yet */
+#define CANFDI_APP_LEARN_CLEAN 1U   /* made: r2 and r3 quiet */
+#define CANFDI_APP_LEARN_FAULT 2U   /* made: a fault was learnt in */
 
 /* Which plant's models run and learn; state, not counters. */
 typedef struct {
@@ -264,6 +267,8 @@ typedef struct {
                      * DC motor's model rules are not tested
                      * (CANFDI_SYM_F_DCM_UNLEARNT) */
   uint8_t learn_check; /* DC motor: CANFDI_APP_LEARN_* */
+  uint8_t learn_seen;  /* DC motor: consecutive steps r2 or r3 was
+                        * evaluated (saturating at UINT8_MAX) */
   uint16_t rearm;   /* steps the model rules stay held after the inputs
                      * came back or a sample was late
                      * (CANFDI_SYM_F_DCM_REARM / _THR_REARM) */

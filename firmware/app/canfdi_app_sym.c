@@ -157,13 +157,16 @@ static void residuals(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
     s->thr_rn_q16[i] = (pt != NULL) ? pt->rn_q16[i] : 0;
   }
   s->dcm_rn_valid = ((pd != NULL) && in->dcm_in_ok) ? pd->valid : 0U;
-  /* POS1/POS2 no evidence while the observer has no angle of its own
-   * (canfdi_parity_thr.h, no_ref): only the correlation is reported */
-  s->thr_rn_valid = ((pt != NULL) && in->thr_in_ok)
-                        ? (uint8_t)(pt->valid & (pt->no_ref ? (uint8_t)~((1U << CANFDI_PARITY_THR_POS1) |
-                                                                          (1U << CANFDI_PARITY_THR_POS2))
-                                                            : 0xFFU))
-                        : 0U;
+  s->thr_rn_valid = 0U;
+  if ((pt != NULL) && in->thr_in_ok) {
+    const uint8_t pos = (uint8_t)((1U << CANFDI_PARITY_THR_POS1) | (1U << CANFDI_PARITY_THR_POS2));
+    s->thr_rn_valid = pt->valid;
+    if (pt->no_ref) {
+      /* POS1/POS2 no evidence while the observer has no angle of its own
+       * (canfdi_parity_thr.h, no_ref): only the correlation is reported */
+      s->thr_rn_valid = (uint8_t)(s->thr_rn_valid & (uint8_t)~pos);
+    }
+  }
 }
 
 static int32_t sgn_s32(int32_t x)

@@ -107,7 +107,7 @@ int32_t canfdi_vote_init(canfdi_vote_t *v, const canfdi_vote_cfg_t *cfg)
 
 /* The angle and outlier of a decided three-way vote; false if no pair
  * agrees. *report is false in the ambiguous row (*1). */
-static bool vote3(const canfdi_vote_cfg_t *c, const int32_t th[CANFDI_VOTE_N_SRC],
+static bool vote3(const canfdi_vote_cfg_t *c, const int32_t th[CANFDI_VOTE_N_SRC], bool no_blame,
                   int32_t *angle, uint8_t *used, uint8_t *outlier, bool *report)
 {
   const bool a12 = agree(th[0], th[1], c->tol_tps_rad_q16);
@@ -122,7 +122,7 @@ static bool vote3(const canfdi_vote_cfg_t *c, const int32_t th[CANFDI_VOTE_N_SRC
     if (!a1m && !a2m) {
       *outlier = CANFDI_VOTE_BIT_MODEL;
     }
-  } else if (a1m && a2m) {
+  } else if ((a1m && a2m) || (no_blame && (a1m || a2m))) {
     *angle = median3(th[0], th[1], th[2]);
     *used = CANFDI_VOTE_BIT_TPS1 | CANFDI_VOTE_BIT_TPS2 | CANFDI_VOTE_BIT_MODEL;
     *report = false;
@@ -227,7 +227,7 @@ int32_t canfdi_vote_step(canfdi_vote_t *v, const canfdi_vote_in_t *in, canfdi_vo
     out->newly_isolated = 0U;
 
     if (n == 3U) {
-      if (vote3(c, out->theta_rad_q16, &angle, &used, &outlier, &report)) {
+      if (vote3(c, out->theta_rad_q16, in->model_no_blame, &angle, &used, &outlier, &report)) {
         st = CANFDI_VOTE_THREE;
       } else {
         st = CANFDI_VOTE_DISAGREE;

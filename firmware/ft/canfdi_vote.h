@@ -132,6 +132,12 @@ typedef struct {
   bool tps1_valid;
   bool tps2_valid;
   bool model_valid;
+  bool model_no_blame; /* the model takes part but singles out no sensor:
+                        * with the sensors apart and the model near one of
+                        * them, the median of three, nobody blamed (as row
+                        * (*1)). Set while the observer has no angle of its
+                        * own (model/canfdi_parity_thr.h, no_ref): near a
+                        * sensor only by its own drift. */
 } canfdi_vote_in_t;
 
 typedef struct {

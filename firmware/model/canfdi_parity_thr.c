@@ -11,12 +11,12 @@
 #define PTHR_W_MAX_Q32 ((int64_t)2000 << 32)
 /* theta_arm follows the TPS mean with 1/2^8 per step while they agree. */
 #define PTHR_LEAK_SHIFT 8U
-/* Steps with the bridge off before a valve at rest is taken to be at the
- * limp-home angle (the header, coasting): 0.1 s. The rest condition does
- * the rest: a returning valve is moving (the default one returns from full
- * travel in about 0.3 s), and it stops only at the limp-home angle. Short,
- * so that the sensor is trusted before the correlation code's persistence
- * (0.5 s, P2135) runs out. */
+/* Consecutive steps with the bridge off and the valve at rest before it is
+ * taken to be at the limp-home angle (the header, coasting): 0.1 s. A
+ * returning valve is moving (the default one returns from full travel in
+ * about 0.3 s) and stops only at the limp-home angle; a turning point of
+ * its settling lasts a few steps. Short, so that the sensor is trusted
+ * before the correlation code's persistence (0.5 s, P2135) runs out. */
 #define PTHR_LH_SETTLE_STEPS 100U
 
 /* ------------------------------------------------------------------------ */
@@ -614,8 +614,7 @@ static void pthr_observe(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *i
     th_p = pthr_clamp64(th_p, canfdi_sub_s64_sat(p->th_arm_q32, half_q32),
                         canfdi_add_s64_sat(p->th_arm_q32, half_q32));
   } else if ((s->src == CANFDI_PARITY_THR_SRC_NONE) && (s->ok1 || s->ok2) && !emf_ok) {
-    if ((p->off_n >= PTHR_LH_SETTLE_STEPS) && (c->pretension_Nm_q24 > c->friction_Nm_q24) &&
-        (pthr_abs(rate) <= c->rest_w_rad_s_q16)) {
+    if ((p->off_n >= PTHR_LH_SETTLE_STEPS) && (c->pretension_Nm_q24 > c->friction_Nm_q24)) {
       /* De-energised and at rest: the pretension holds the valve at the
        * limp-home angle (the header, coasting). */
       th_p = (int64_t)c->limp_home_rad_q16 * 65536;
@@ -750,7 +749,9 @@ static void pthr_remember(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *
   p->th2_prev_q16 = s->th2;
   p->ok_prev = s->ok;
   p->en_prev = in->enabled;
-  p->off_n = in->enabled ? 0U : ((p->off_n < UINT16_MAX) ? (uint16_t)(p->off_n + 1U) : p->off_n);
+  p->off_n = (in->enabled || (pthr_abs(canfdi_svf_dy_q16(&p->svf_th)) > p->cfg->rest_w_rad_s_q16))
+                 ? 0U
+                 : ((p->off_n < UINT16_MAX) ? (uint16_t)(p->off_n + 1U) : p->off_n);
 }
 
 const canfdi_parity_thr_out_t *canfdi_parity_thr_step(canfdi_parity_thr_t *p,
@@ -786,6 +787,9 @@ int32_t canfdi_parity_thr_force_source(canfdi_parity_thr_t *p, uint8_t src)
     p->src = src;
     p->in_band_n = 0U;
     p->cand_n = 0U;
+    if ((src == CANFDI_PARITY_THR_SRC_TPS1) || (src == CANFDI_PARITY_THR_SRC_TPS2)) {
+      p->unref = false; /* the observer follows the sensor imposed */
+    }
     out = CANFDI_OK;
   }
   return out;

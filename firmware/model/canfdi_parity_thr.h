@@ -93,23 +93,29 @@
  *              a fraction of lh_width of the limp-home angle (the default
  *              valve: 0.396 against 0.284 N m, so within 0.09 deg; it
  *              returns from full travel in about 0.3 s). So once the
- *              bridge has been off for PTHR_LH_SETTLE_STEPS (0.1 s) and the valve
- *              is at rest (rest_w), the coasting observer is set to
- *              theta_LH: a disagreement present from power-up (the
+ *              bridge has been off and the valve at rest (rest_w) for
+ *              PTHR_LH_SETTLE_STEPS (0.1 s), the coasting observer is set
+ *              to theta_LH: a disagreement present from power-up (the
  *              manager de-energises the valve while it is not isolated)
  *              or one that outlasted the coast is then decided by the
  *              sensor that reads the limp-home angle. Not with a
- *              configured pretension at or below the friction.
+ *              configured pretension at or below the friction. The
+ *              reference assumes one fault: a TPS disagreement together
+ *              with a weak spring, more friction or a jam (the valve then
+ *              rests elsewhere) is outside it, as for the diagnosis.
  *              A disagreement present from the first sample after init or
  *              reset leaves the observer at the sensors' mean with nothing
- *              from before it: coasting from there, the model's error
- *              alone would pick a sensor (a 0.05 V TPS1 drift from power-up
- *              was taken for TPS2 on three seeds of three). No sensor is
- *              trusted then until the observer has an angle of its own:
- *              the correlation was within its base band once (the band
- *              widens with the valve's motion, and a small disagreement
- *              fits a widened one), or the limp-home angle was taken. Measured coasting drift with the
- *              test plant: ~5 mrad over 20 s of 20-deg strokes every 0.5 s;
+ *              from before it: coasting from there, the model's own drift
+ *              would pick a sensor. No sensor is trusted then, by the
+ *              selection below or by the vote (no_ref), until the observer
+ *              has an angle of its own: the correlation was within its
+ *              base band once (the band widens with the valve's motion,
+ *              and a small disagreement fits a widened one; one just above
+ *              the base band that dips into it leaves POS1/POS2 far inside
+ *              their band), the limp-home angle was taken, or the manager
+ *              imposed a sensor (canfdi_parity_thr_force_source).
+ *              Measured coasting drift with the test plant: ~5 mrad over
+ *              20 s of 20-deg strokes every 0.5 s;
  *        TPS1 / TPS2  once, while coasting, one position residual is more
  *              than select_ratio (4) times the other and above its band,
  *              with the valve at rest (|dtheta/dt| <= rest_w), for
@@ -393,8 +399,9 @@ typedef struct {
                            * saturating at UINT16_MAX */
   uint16_t in_band_n;     /* consecutive steps CORR was inside its band,
                            * saturating at UINT16_MAX */
-  uint16_t off_n;         /* consecutive steps with the bridge off,
-                           * saturating at UINT16_MAX */
+  uint16_t off_n;         /* consecutive steps with the bridge off and
+                           * the valve at rest (rest_w), saturating at
+                           * UINT16_MAX */
   uint8_t ok_prev;
   uint8_t src;
   uint8_t cand;

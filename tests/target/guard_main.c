@@ -456,6 +456,7 @@ static void guard_ft(void)
   vin.tps1_valid = (in_u32 & 1U) != 0U;
   vin.tps2_valid = (in_u32 & 2U) != 0U;
   vin.model_valid = (in_u32 & 4U) != 0U;
+  vin.model_no_blame = (in_u32 & 64U) != 0U;
   sink32(canfdi_vote_init(&vote, &vc));
   sink32(canfdi_vote_step(&vote, &vin, &vout));
   canfdi_vote_clear(&vote);

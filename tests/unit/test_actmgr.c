@@ -980,6 +980,7 @@ static void rig_step(rig_t *r, double speed_ref, double angle_ref_deg, double lo
   vin.tps1_valid = tps_in_range(me->value[CANFDI_SIM_S_THR_TPS1]);
   vin.tps2_valid = tps_in_range(me->value[CANFDI_SIM_S_THR_TPS2]);
   vin.model_valid = false; /* no observer in this rig: the vote runs on the TPS pair */
+  vin.model_no_blame = false;
   ck_assert_int_eq(canfdi_vote_step(&r->vote, &vin, &r->vout), CANFDI_OK);
 
   in.dcm_u_ctrl_V_q16 = Q16(pin.dcm.u_cmd_V);

@@ -54,6 +54,7 @@ static canfdi_vote_in_t make_in(double th1, double th2, double thm, bool v1, boo
   in.tps1_valid = v1;
   in.tps2_valid = v2;
   in.model_valid = vm;
+  in.model_no_blame = false;
   return in;
 }
 
@@ -417,6 +418,36 @@ START_TEST(test_no_isolation_without_evidence)
 }
 END_TEST
 
+START_TEST(test_model_without_blame)
+{
+  /* The model near one sensor with the sensors apart: without
+   * model_no_blame the far sensor is the outlier and is isolated; with it
+   * the median of three closes the loop, nobody blamed, however long. */
+  const canfdi_vote_cfg_t c = design_cfg(2U, 2U);
+  canfdi_vote_t v;
+  canfdi_vote_in_t in;
+  canfdi_vote_out_t out;
+  uint32_t step;
+  ck_assert_int_eq(canfdi_vote_init(&v, &c), CANFDI_OK);
+  for (step = 0U; step < 50U; step++) {
+    in = make_in(0.30, 0.40, 0.31, true, true, true);
+    in.model_no_blame = true;
+    ck_assert_int_eq(canfdi_vote_step(&v, &in, &out), CANFDI_OK);
+    ck_assert_uint_eq(out.status, CANFDI_VOTE_THREE);
+    ck_assert(out.valid);
+    ck_assert_uint_eq(out.outlier_mask, 0U);
+    assert_angle(out.angle_rad_q16, 0.31);
+  }
+  ck_assert_uint_eq(out.isolated_mask, 0U);
+  in.model_no_blame = false;
+  for (step = 0U; step < 2U; step++) {
+    ck_assert_int_eq(canfdi_vote_step(&v, &in, &out), CANFDI_OK);
+    ck_assert_uint_eq(out.outlier_mask, T2);
+  }
+  ck_assert_uint_eq(out.isolated_mask, T2);
+}
+END_TEST
+
 START_TEST(test_second_fault_after_isolation)
 {
   /* TPS2 isolated; then TPS1 and the model disagree -> DISAGREE (no tie
@@ -470,6 +501,7 @@ static Suite *make_suite(void)
   tcase_add_loop_test(tc, test_isolation_exact_time, 0, N_ISO);
   tcase_add_loop_test(tc, test_transient_never_isolates, 0, N_ISO);
   tcase_add_test(tc, test_no_isolation_without_evidence);
+  tcase_add_test(tc, test_model_without_blame);
   tcase_add_test(tc, test_second_fault_after_isolation);
   suite_add_tcase(s, tc);
   return s;

@@ -290,7 +290,12 @@ def _quiet_destructors(collect: bool) -> Iterator[None]:
     try:
         yield
     except BaseException as e:
-        traceback.clear_frames(e.__traceback__)
+        seen: set[int] = set()
+        x: BaseException | None = e
+        while x is not None and id(x) not in seen:  # the frames of the exceptions it came from hold it too
+            seen.add(id(x))
+            traceback.clear_frames(x.__traceback__)
+            x = x.__cause__ or x.__context__
         if collect:
             gc.collect()
         raise

@@ -99,11 +99,11 @@ class _FrameState:
 
 
 @functools.lru_cache(maxsize=8)
-def _load_dbc(path: Path, mtime_ns: int, size: int) -> object:
-    """The other bus's DBC, parsed once while the file is unchanged (its time stamp and size are
-    part of the key). The databases are only read (decode, look-ups), never changed, so one parse
-    can serve every map that names the file."""
-    del mtime_ns, size  # the cache key only
+def _load_dbc(path: Path, mtime_ns: int, size: int, inode: int) -> Any:
+    """The other bus's DBC, parsed once while the file is unchanged (its time stamp, size and inode
+    are part of the key). The databases are only read (decode, look-ups), never changed, so one
+    parse can serve every map that names the file."""
+    del mtime_ns, size, inode  # the cache key only
     return cantools.database.load_file(str(path))
 
 
@@ -163,7 +163,7 @@ class Mapper:
             raise MapError(f"{path}: no 'dbc = FILE' line: the other bus's database is needed")
         try:
             st = dbc_path.stat()
-            other = _load_dbc(dbc_path, st.st_mtime_ns, st.st_size)
+            other = _load_dbc(dbc_path, st.st_mtime_ns, st.st_size, st.st_ino)
         except Exception as e:  # noqa: BLE001 — any DBC error becomes a message with the file
             raise MapError(f"{path}: cannot load the other DBC {dbc_path}: {e}") from e
         if not isinstance(other, Database):

@@ -281,6 +281,7 @@ enum {
   WHY_THR_APART,
   WHY_DCM_UNLEARNT,
   WHY_DCM_TAINTED,
+  WHY_DCM_UNCHECKED,
   WHY_DCM_REARM,
   WHY_THR_REARM,
   WHY_MODELS_DCM,
@@ -305,6 +306,8 @@ static const char *const why_text[N_WHY] = {
     "excitation in the recording so far",
     "the DC motor's residuals without R_A (r2, r3) showed a fault when its estimates and the parity "
     "equations' R_A had been learnt: the fault may be learnt into them (to the end of the power cycle)",
+    "the DC motor's estimates have converged, but what they and R_A learnt is not checked yet against r2 "
+    "and r3 (R_A still being learnt, or r2 and r3 not evaluated long enough: near standstill, a load hold)",
     "re-arming: the DC-motor inputs came back from an interruption (rejected frames or values, a "
     "timeout) or a DcmSensor frame was late, less than the calibration's hold time ago",
     "re-arming: the throttle inputs came back from an interruption (rejected frames or values, a "
@@ -779,6 +782,7 @@ static void monitor_whys(bool dcm_cmd_known, bool thr_cmd_known, bool power_up, 
                       : !dcm_in ? WHY_DCM_INPUTS
                       : !a->dcm.learnt ? WHY_DCM_UNLEARNT
                       : (a->dcm.learn_check == CANFDI_APP_LEARN_FAULT) ? WHY_DCM_TAINTED
+                      : (a->dcm.learn_check == CANFDI_APP_LEARN_PENDING) ? WHY_DCM_UNCHECKED
                       : (a->dcm.rearm > 0U) ? WHY_DCM_REARM
                                 : WHY_NONE;
   w[MON_DCM_CMD] = (w[MON_DCM_MODELS] != WHY_NONE) ? w[MON_DCM_MODELS] : (!dcm_cmd_known ? WHY_DCM_CMD : WHY_NONE);
