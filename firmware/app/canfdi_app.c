@@ -368,9 +368,15 @@ static void stage_diagnose(canfdi_app_t *app)
     const int8_t s2 = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R2);
     const int8_t s3 = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_DC_MOTOR, (uint8_t)CANFDI_SYM_DCM_R3);
     const bool seen = (s2 != CANFDI_DIAG_SYM_UNKNOWN) || (s3 != CANFDI_DIAG_SYM_UNKNOWN);
-    app->dcm.learn_seen = !seen ? 0U : ((app->dcm.learn_seen < UINT8_MAX) ? (uint8_t)(app->dcm.learn_seen + 1U)
-                                                                          : app->dcm.learn_seen);
-    const uint16_t need = (app->cal.diagnosis.sym_on_steps < UINT8_MAX) ? app->cal.diagnosis.sym_on_steps : UINT8_MAX;
+    if (!seen) {
+      app->dcm.learn_seen = 0U;
+    } else if (app->dcm.learn_seen < UINT8_MAX) {
+      app->dcm.learn_seen = (uint8_t)(app->dcm.learn_seen + 1U);
+    } else {
+      /* saturated */
+    }
+    const uint16_t need = (app->cal.diagnosis.sym_on_steps < (uint16_t)UINT8_MAX) ? app->cal.diagnosis.sym_on_steps
+                                                                                   : (uint16_t)UINT8_MAX;
     if (app->dcm.learnt && (app->dcm.learn_seen >= need) &&
         ((canfdi_parity_dcm_out(&app->parity_dcm)->valid & (1U << CANFDI_PARITY_DCM_R1)) != 0U)) {
       app->dcm.learn_check = ((s2 == CANFDI_DIAG_SYM_POS) || (s2 == CANFDI_DIAG_SYM_NEG) ||

@@ -749,9 +749,13 @@ static void pthr_remember(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *
   p->th2_prev_q16 = s->th2;
   p->ok_prev = s->ok;
   p->en_prev = in->enabled;
-  p->off_n = (in->enabled || (pthr_abs(canfdi_svf_dy_q16(&p->svf_th)) > p->cfg->rest_w_rad_s_q16))
-                 ? 0U
-                 : ((p->off_n < UINT16_MAX) ? (uint16_t)(p->off_n + 1U) : p->off_n);
+  if (in->enabled || (pthr_abs(canfdi_svf_dy_q16(&p->svf_th)) > p->cfg->rest_w_rad_s_q16)) {
+    p->off_n = 0U;
+  } else if (p->off_n < UINT16_MAX) {
+    p->off_n = (uint16_t)(p->off_n + 1U);
+  } else {
+    /* saturated */
+  }
 }
 
 const canfdi_parity_thr_out_t *canfdi_parity_thr_step(canfdi_parity_thr_t *p,
