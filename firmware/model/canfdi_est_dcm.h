@@ -62,7 +62,7 @@
  * `decim` steps (never both in one step): canfdi_svf.h and canfdi_rls.h
  * state their cost per call; `make bench-pil-profile` measures the whole
  * step in the application, per module and function
- * (build/bench/pil_profile.json). Memory: sizeof(canfdi_est_dcm_t) = 1232
+ * (build/bench/pil_profile.json). Memory: sizeof(canfdi_est_dcm_t) = 1136
  * bytes on a 32-bit target (four SVFs and two RLS instances sized
  * CANFDI_CFG_RLS_MAX_PARAMS).
  */

@@ -122,7 +122,7 @@
  * call; `make bench-pil-profile` measures the whole step in the
  * application, per module and function (build/bench/pil_profile.json).
  * A larger decim lowers the average (the memory 1/(forget rate) scales
- * with it). Memory: sizeof(canfdi_est_thr_t) = 1344 bytes on
+ * with it). Memory: sizeof(canfdi_est_thr_t) = 1248 bytes on
  * a 32-bit target.
  */
 #ifndef CANFDI_EST_THR_H

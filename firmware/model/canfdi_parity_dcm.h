@@ -237,8 +237,8 @@
  * per step on average on Cortex-M4 and 5 480 on Cortex-M0.
  * Most of it is the four third-order SVFs and 64-bit arithmetic, which
  * ARMv6-M lacks. Code (`make footprint`, the application image): 5.7 kB
- * (M4), 7.0 kB (M0) plus canfdi_svf, adapt and fixp. Memory: sizeof(canfdi_parity_dcm_t) = 888
- * bytes on a 32-bit target (4 SVFs 416, 4 thresholds 160, coefficients,
+ * (M4), 7.0 kB (M0) plus canfdi_svf, adapt and fixp. Memory: sizeof(canfdi_parity_dcm_t) = 792
+ * bytes on a 32-bit target (4 SVFs 320, 4 thresholds 160, coefficients,
  * state), caller-owned; the configuration (168 bytes) is caller-owned and
  * must outlive the instance. No heap, no globals, no floating point;
  * reentrant per instance.

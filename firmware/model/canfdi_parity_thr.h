@@ -253,7 +253,7 @@
  * canfdi_svf, canfdi_adapt, canfdi_fixp, canfdi_intrin and libgcc there).
  * Code (`make footprint`, the application image): 6.0 kB (M4), 7.4 kB
  * (M0) plus canfdi_tps, svf, adapt and fixp.
- * Memory: sizeof(canfdi_parity_thr_t) = 736 bytes on a 32-bit target,
+ * Memory: sizeof(canfdi_parity_thr_t) = 664 bytes on a 32-bit target,
  * caller-owned; the configuration (188 bytes) must outlive the instance.
  * No heap, no globals, no floating point; reentrant per instance.
  */

@@ -76,7 +76,6 @@ int32_t canfdi_svf_init(canfdi_svf_t *f, const canfdi_svf_cfg_t *cfg)
       const int64_t qi = (int64_t)q;
       int64_t a[CANFDI_SVF_MAX_ORDER][CANFDI_SVF_MAX_ORDER] = {{0}};
       uint64_t den = (p + q) * (p + q);
-      unsigned i;
       unsigned j;
       if (cfg->order == 2U) {
         a[0][0] = qi + 2 * pi;
@@ -99,11 +98,13 @@ int32_t canfdi_svf_init(canfdi_svf_t *f, const canfdi_svf_cfg_t *cfg)
       if (f->cfg.outputs == 0U) {
         f->cfg.outputs = CANFDI_SVF_OUT_ALL;
       }
-      for (i = 0U; i < CANFDI_SVF_MAX_ORDER; i++) {
-        for (j = 0U; j < CANFDI_SVF_MAX_ORDER; j++) {
-          f->g_q31[i][j] = (a[i][j] == 0) ? 0 : svf_ratio_q31(pi * a[i][j], den);
-        }
+      /* the last row of G; the other increments follow from it (step) */
+      for (j = 0U; j < CANFDI_SVF_MAX_ORDER; j++) {
+        const int64_t an = a[cfg->order - 1U][j];
+        f->g_q31[j] = (an == 0) ? 0 : svf_ratio_q31(pi * an, den);
       }
+      /* h = p / q in Q31; h = 1 (wc T / 2 = 1) saturates to 1 - 2^-31 */
+      f->h_q31 = (p == q) ? INT32_MAX : svf_ratio_q31(pi, q);
       f->diag.steps = 0U;
       f->diag.resets = 0U;
       f->diag.out_saturations = 0U;
@@ -205,8 +206,13 @@ static inline int32_t svf_out_k2(int64_t v, int32_t wc, uint32_t *sat)
  * |v_i| <= L1_i 2^47 with the L1 norms of the state impulse responses at
  * most 1 (v_1), 0.74 (v_2, n = 2), 0.55 and 0.63 (v_2, v_3, n = 3) over the
  * whole wc domain; svf_bound keeps them within 2^50 whatever happens, so
- * w < 2^54, every G w product < 2^54 and their sums < 2^56: nothing below
- * can overflow, and the result is the same as with saturating sums.
+ * |w_n| < 2^54 and |w_i| < 2^51 (i < n). G's last row over h in (0, 1]:
+ * n = 3, |G_31| = h^2 / (1 + h)^3 <= 1/8, |G_32| = h^2 (3 + h) / (1 + h)^3
+ * <= 1/2, G_33 = h / (1 + h)^3 < 0.15; n = 2, both entries h^2 / (1 + h)^2
+ * and h / (1 + h)^2 <= 1/4. So |dv_n| < 2^52, each back substitution
+ * w_i + dv_(i+1) stays below 2^53 and its product too: every operand is
+ * within svf_mul_q31's 2^56, nothing below can overflow, and the result is
+ * the same as with saturating sums.
  */
 void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16)
 {
@@ -219,27 +225,31 @@ void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16)
   CANFDI_ASSERT(f != NULL);
   CANFDI_ASSERT((f->cfg.order == 2U) || (f->cfg.order == 3U));
   if (f->cfg.order == 2U) {
-    /* w = (2 v2, u(k) + u(k+1) - 2 v1 - 4 v2) */
+    /* w = (2 v2, u(k) + u(k+1) - 2 v1 - 4 v2); dv2 from G's last row,
+     * dv1 = h (w1 + dv2) (the first row of (I - hM) dv = h w) */
     const int64_t w0 = 2 * v1;
     const int64_t w1 = us - (2 * v0) - (4 * v1);
-    const int64_t n0 = svf_bound(v0 + (svf_mul_q31(w0, f->g_q31[0][0]) + svf_mul_q31(w1, f->g_q31[0][1])));
-    const int64_t n1 = svf_bound(v1 + (svf_mul_q31(w0, f->g_q31[1][0]) + svf_mul_q31(w1, f->g_q31[1][1])));
+    const int64_t dv1 = svf_mul_q31(w0, f->g_q31[0]) + svf_mul_q31(w1, f->g_q31[1]);
+    const int64_t n1 = svf_bound(v1 + dv1);
+    const int64_t n0 = svf_bound(v0 + svf_mul_q31(w0 + dv1, f->h_q31));
     f->v_q32[0] = n0;
     f->v_q32[1] = n1;
     /* f_2(k+1) = u(k+1) - v1 - 2 v2 (normalised second derivative) */
     d2 = ((int64_t)x_q16 * 65536) - n0 - (2 * n1);
   } else {
     const int64_t v2 = f->v_q32[2];
-    /* w = (2 v2, 2 v3, u(k) + u(k+1) - 2 v1 - 6 (v2 + v3)) */
+    /* w = (2 v2, 2 v3, u(k) + u(k+1) - 2 v1 - 6 (v2 + v3)); dv3 from G's
+     * last row, then dv2 = h (w2 + dv3) and dv1 = h (w1 + dv2) (the first
+     * two rows of (I - hM) dv = h w) */
     const int64_t w0 = 2 * v1;
     const int64_t w1 = 2 * v2;
     const int64_t w2 = us - (2 * v0) - (6 * (v1 + v2));
-    const int64_t n0 = svf_bound(v0 + ((svf_mul_q31(w0, f->g_q31[0][0]) + svf_mul_q31(w1, f->g_q31[0][1])) +
-                                       svf_mul_q31(w2, f->g_q31[0][2])));
-    const int64_t n1 = svf_bound(v1 + ((svf_mul_q31(w0, f->g_q31[1][0]) + svf_mul_q31(w1, f->g_q31[1][1])) +
-                                       svf_mul_q31(w2, f->g_q31[1][2])));
-    const int64_t n2 = svf_bound(v2 + ((svf_mul_q31(w0, f->g_q31[2][0]) + svf_mul_q31(w1, f->g_q31[2][1])) +
-                                       svf_mul_q31(w2, f->g_q31[2][2])));
+    const int64_t dv2 =
+        (svf_mul_q31(w0, f->g_q31[0]) + svf_mul_q31(w1, f->g_q31[1])) + svf_mul_q31(w2, f->g_q31[2]);
+    const int64_t dv1 = svf_mul_q31(w1 + dv2, f->h_q31);
+    const int64_t n2 = svf_bound(v2 + dv2);
+    const int64_t n1 = svf_bound(v1 + dv1);
+    const int64_t n0 = svf_bound(v0 + svf_mul_q31(w0 + dv1, f->h_q31));
     f->v_q32[0] = n0;
     f->v_q32[1] = n1;
     f->v_q32[2] = n2;

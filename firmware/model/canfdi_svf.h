@@ -25,9 +25,13 @@
  *   v(k+1) = v(k) + h (f(k) + f(k+1)),   f = M v + b u   (the model above)
  * solved for the increment: dv = G w with
  *   G = h (I - h M)^-1,   w = 2 M v(k) + b (u(k) + u(k+1)).
- * M holds small integers, so w costs only shifts and adds; G (n x n) is
- * precomputed by init in integer arithmetic from the exact rational h
- * (no float, not even at init). Consequences, all tested:
+ * M holds small integers, so w costs only shifts and adds. Only the last
+ * row of G is applied: it gives dv_n, and the first n - 1 rows of
+ * (I - h M) dv = h w, dv_i - h dv_(i+1) = h w_i, give the others by back
+ * substitution, dv_i = h (w_i + dv_(i+1)): 2n - 1 products instead of n^2,
+ * the same increment in exact arithmetic. That row and h are precomputed
+ * by init in integer arithmetic from the exact rational h (no float, not
+ * even at init). Consequences, all tested:
  *   - DC gain exactly 1 (a constant input gives y = u, dy = d2y = 0 in
  *     steady state, independent of the rounding of G);
  *   - a ramp of slope a gives dy -> a exactly (up to the rounding of G,
@@ -50,8 +54,9 @@
  * signal's unit, unit/s and unit/s^2. The normalised states are int64_t with
  * 32 fraction bits (Q31.32): the input enters exactly (a Q16.16 value shifted
  * by 16), and rounding errors of the state update stay ~2^-33 per step, far
- * below the Q16.16 output LSB. G is Q31 (|G_ij| < 1 because h <= 1), applied
- * with canfdi_mul_s64_q31 (round half up). State additions saturate
+ * below the Q16.16 output LSB. G's last row and h are Q31 (|G_nj| < 1
+ * because h <= 1; h = 1, wc T = 2, is held as 1 - 2^-31), applied with
+ * a rounded 64 x Q31 product (round half up). State additions saturate
  * (canfdi_add_s64_sat) — unreachable for inputs in Q16.16 range, because
  * |v_i| stays within a few times the input range. The outputs are rounded
  * half up to Q16.16 and saturate to INT32_MIN/MAX (e.g. d2y of a step of a
@@ -66,18 +71,18 @@
  *   p + q < 2^20 (true for T = 1 ms or 0.5 ms and any allowed wc; init's
  *   exact integer arithmetic needs (p + q)^3 < 2^60).
  *
- * Cost per canfdi_svf_step (n = order): n^2 rounded products of a 64-bit
- * state difference and a Q31 gain (4 or 9; each a SMULL and a UMULL on
- * ARMv7-M, their 16-bit halves on ARMv6-M), plain 64-bit sums under the
+ * Cost per canfdi_svf_step (n = order): 2n - 1 rounded products of a
+ * 64-bit state difference and a Q31 gain (3 or 5; each a SMULL and a UMULL
+ * on ARMv7-M, their 16-bit halves on ARMv6-M), plain 64-bit sums under the
  * state bound of canfdi_svf.c, and per output computed (cfg.outputs) a
  * rounding with up to two 64-bit products by wc (none for y, one for dy,
  * two for d2y). Measured executed instructions per call in the
  * application (`make bench-pil-profile`, dcm_ia_offset: the eleven
  * order-3 and four order-2 filters with their output sets, wc 100-300):
  * ~330 on the Cortex-M4, ~1 000 on the Cortex-M0.
- * canfdi_svf_init: a gcd (64-bit modulo, a few iterations) and n^2 31-step
- * long divisions, < 10 k instructions; not for the 1 ms path.
- * Memory: sizeof(canfdi_svf_t) = 104 bytes on a 32-bit target, caller-owned.
+ * canfdi_svf_init: a gcd (64-bit modulo, a few iterations) and n + 1
+ * 31-step long divisions, < 10 k instructions; not for the 1 ms path.
+ * Memory: sizeof(canfdi_svf_t) = 80 bytes on a 32-bit target, caller-owned.
  * No heap, no globals, reentrant per instance.
  */
 #ifndef CANFDI_SVF_H
@@ -115,7 +120,8 @@ typedef struct {
 
 typedef struct {
   canfdi_svf_cfg_t cfg;
-  int32_t g_q31[CANFDI_SVF_MAX_ORDER][CANFDI_SVF_MAX_ORDER]; /* G = h (I - hM)^-1 */
+  int32_t g_q31[CANFDI_SVF_MAX_ORDER]; /* the last row of G = h (I - hM)^-1 */
+  int32_t h_q31;                       /* h = wc T / 2 */
   int64_t v_q32[CANFDI_SVF_MAX_ORDER]; /* normalised states y, y'/wc, y''/wc^2, Q31.32 */
   int32_t u_prev_q16; /* last input u(k) */
   int32_t y_q16;      /* outputs of the last step */
