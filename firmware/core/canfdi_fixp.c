@@ -8,6 +8,7 @@
  * round-half-up on the magnitude.
  */
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_intrin.h"
 
 /* floor(2^63 / (2^31 + i 2^23)) - 2^15, i = 0..256 (see canfdi_fixp.h). */
 const uint32_t canfdi_recip_seed[257] = {
@@ -73,6 +74,56 @@ static uint32_t udiv_rnd_u32(uint32_t num, uint32_t den)
   return (r >= (den - r)) ? (q + 1U) : q;
 }
 
+/*
+ * floor(num / den) for num < den 2^32 (so that the quotient fits 32 bits),
+ * the remainder in *rem: long division by 16-bit digits of the divisor
+ * normalised to its top bit (Knuth, TAOCP vol. 2, 4.3.1, algorithm D),
+ * i.e. two 32-bit divisions (UDIV on ARMv7-M, __aeabi_uidiv on ARMv6-M)
+ * instead of libgcc's 64-bit division, which costs several times as much.
+ * Scaling and overflow: num 2^s < den 2^(32+s) < 2^64 loses no bit; each
+ * digit estimate exceeds the true digit by at most 2 and is corrected
+ * before use, so every partial remainder is below d < 2^32 and the
+ * products q dl are formed only for q < 2^16.
+ */
+static uint32_t udiv_u64_u32(uint64_t num, uint32_t den, uint32_t *rem)
+{
+  const unsigned s = canfdi_clz32(den); /* den != 0 */
+  const uint32_t d = den << s;
+  const uint32_t dh = d >> 16;
+  const uint32_t dl = d & 0xFFFFU;
+  const uint64_t nn = num << s;
+  const uint32_t n1 = (uint32_t)(nn >> 32); /* < d */
+  const uint32_t n0h = (uint32_t)nn >> 16;
+  const uint32_t n0l = (uint32_t)nn & 0xFFFFU;
+  uint32_t q1 = n1 / dh;
+  uint32_t r = n1 - (q1 * dh);
+  uint32_t m;
+  uint32_t q0;
+  while ((q1 > 0xFFFFU) || ((q1 * dl) > ((r << 16) | n0h))) {
+    q1--;
+    r += dh;
+    if (r > 0xFFFFU) {
+      break;
+    }
+  }
+  m = ((n1 << 16) | n0h) - (q1 * d); /* modulo 2^32: the remainder, < d */
+  q0 = m / dh;
+  r = m - (q0 * dh);
+  while ((q0 > 0xFFFFU) || ((q0 * dl) > ((r << 16) | n0l))) {
+    q0--;
+    r += dh;
+    if (r > 0xFFFFU) {
+      break;
+    }
+  }
+  *rem = (((m << 16) | n0l) - (q0 * d)) >> s;
+  return (q1 << 16) | q0;
+}
+
+/*
+ * round(num / den) for den != 0, ties up, when it is below 2^32; 2^32 for
+ * any larger quotient (the one caller saturates from 2^31 on).
+ */
 static uint64_t udiv_rnd_u64(uint64_t num, uint32_t den)
 {
   uint64_t q;
@@ -80,10 +131,12 @@ static uint64_t udiv_rnd_u64(uint64_t num, uint32_t den)
     /* Small operands take the 32-bit division (UDIV on M4, the cheaper
      * helper on M0+) instead of the 64-bit helper. */
     q = udiv_rnd_u32((uint32_t)num, den);
+  } else if ((uint32_t)(num >> 32) >= den) {
+    q = (uint64_t)1U << 32; /* num / den >= 2^32 */
   } else {
-    const uint64_t q0 = num / den;
-    const uint64_t r = num % den; /* one __aeabi_uldivmod gives both */
-    q = (r >= ((uint64_t)den - r)) ? (q0 + 1U) : q0;
+    uint32_t r;
+    const uint32_t q0 = udiv_u64_u32(num, den, &r);
+    q = (r >= (den - r)) ? ((uint64_t)q0 + 1U) : (uint64_t)q0;
   }
   return q;
 }
