@@ -48,8 +48,13 @@ PIL_PORT_APP_SRC := firmware/port/cortexm/canfdi_cortexm_main.c firmware/port/co
 PIL_DIR := $(BUILD)/pil
 PIL_ELFS := $(foreach m,$(PIL_MACHINES),$(PIL_DIR)/pil_step_$(m).elf)
 
+# Every firmware header is a prerequisite: a struct or an inline function
+# changed in a header must rebuild the images that PIL measures.
+PIL_FW_HDR := $(sort $(shell find firmware -name '*.h' 2>/dev/null))
+
 define PIL_RULES
-$(PIL_DIR)/pil_step_$(1).elf: tests/pil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPTS)
+$(PIL_DIR)/pil_step_$(1).elf: tests/pil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPTS) \
+    $(PIL_FW_HDR)
 	@mkdir -p $$(@D)
 	$(ARM_CC) $(TGT_ARCH_$(call pil_core,$(1))) $(TGT_CFLAGS) -DBENCH_TICKS_NUM=$(call pil_num,$(1))U \
 	  -DBENCH_TICKS_DEN=$(call pil_den,$(1))U --specs=rdimon.specs $(call tgt_link,$(call pil_ld,$(1))) \
@@ -123,7 +128,8 @@ PIL_COST_FOUND ?= 300
 PIL_COST_ELFS := $(foreach m,$(PIL_COST_MACHINES),$(PIL_DIR)/pil_cost_$(m).elf)
 PIL_EXPORT := $(PIL_DIR)/fuzz-export-app-rx
 define PIL_COST_RULES
-$(PIL_DIR)/pil_cost_$(1).elf: tests/pil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPTS)
+$(PIL_DIR)/pil_cost_$(1).elf: tests/pil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPTS) \
+    $(PIL_FW_HDR)
 	@mkdir -p $$(@D)
 	$(ARM_CC) $(TGT_ARCH_$(call pil_core,$(1))) $(TGT_CFLAGS) -DPIL_COST -DBENCH_TICKS_NUM=$(call pil_num,$(1))U \
 	  -DBENCH_TICKS_DEN=$(call pil_den,$(1))U --specs=rdimon.specs $(call tgt_link,$(call pil_ld,$(1))) \
