@@ -7,7 +7,11 @@
 #include <string.h>
 
 #include "core/canfdi_count.h"
+#include "core/canfdi_intrin.h"
 #include "diag/canfdi_diagnosis.h"
+
+/* Source 3 collects the DTCs it reports as a bit mask. */
+CANFDI_STATIC_ASSERT(CANFDI_CFG_DTC_MAX_DTCS <= 32U, dtc_indices_fit_the_mask);
 
 void canfdi_dtcroute_default_cfg(canfdi_dtcroute_cfg_t *cfg)
 {
@@ -53,24 +57,29 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
   return rc;
 }
 
-/* Source 1: per DTC the combined verdict of the faults that feed it. */
-static void combine_faults(const canfdi_dtcroute_t *r, const canfdi_dtcroute_in_t *in, int8_t *agg)
+/* Source 1: per DTC the combined verdict of the faults that feed it;
+ * returns how many DTCs have one. */
+static uint32_t combine_faults(const canfdi_dtcroute_t *r, const canfdi_dtcroute_in_t *in, int8_t *agg)
 {
   uint32_t f;
   uint32_t j;
+  uint32_t n = 0U;
   for (f = 1U; f < CANFDI_FAULT_COUNT; f++) {
     int8_t v = in->report[f];
     if ((in->mgr_detected & CANFDI_FAULT_BIT(f)) != 0U) {
       v = CANFDI_DIAG_REPORT_FAILED;
     }
-    for (j = 0U; j < CANFDI_CATALOGUE_MAX_DTCS; j++) {
-      const uint8_t idx = r->fault_dtc[f][j];
-      if ((idx != CANFDI_DTC_NONE) && (v != CANFDI_DIAG_REPORT_NONE) &&
-          (agg[idx] != CANFDI_DIAG_REPORT_FAILED)) {
-        agg[idx] = v;
+    if (v != CANFDI_DIAG_REPORT_NONE) {
+      for (j = 0U; j < CANFDI_CATALOGUE_MAX_DTCS; j++) {
+        const uint8_t idx = r->fault_dtc[f][j];
+        if ((idx != CANFDI_DTC_NONE) && (agg[idx] != CANFDI_DIAG_REPORT_FAILED)) {
+          n += (agg[idx] == CANFDI_DIAG_REPORT_NONE) ? 1U : 0U;
+          agg[idx] = v;
+        }
       }
     }
   }
+  return n;
 }
 
 /* Source 2: P2135 from the persistence of an unisolated disagreement. */
@@ -111,22 +120,25 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
   if ((r != NULL) && r->initialised && (dtc != NULL) && (in != NULL) && (in->report != NULL) &&
       (in->com != NULL)) {
     int8_t agg[CANFDI_CFG_DTC_MAX_DTCS];
+    uint32_t n_agg;
+    uint32_t act;
+    uint32_t touched = 0U;
+    uint32_t failed = 0U;
     uint32_t j;
     rc = 0;
-    for (j = 0U; j < CANFDI_CFG_DTC_MAX_DTCS; j++) {
-      agg[j] = CANFDI_DIAG_REPORT_NONE;
+    (void)memset(agg, CANFDI_DIAG_REPORT_NONE, sizeof agg);
+    n_agg = combine_faults(r, in, agg);
+    if (r->p2135_dtc != CANFDI_DTC_NONE) {
+      const bool had = (agg[r->p2135_dtc] != CANFDI_DIAG_REPORT_NONE);
+      p2135(r, in, agg);
+      n_agg += (!had && (agg[r->p2135_dtc] != CANFDI_DIAG_REPORT_NONE)) ? 1U : 0U;
     }
-    combine_faults(r, in, agg);
-    p2135(r, in, agg);
     if (r->agg_last_valid && dtc->cycle_active && (dtc->changes == r->changes_last) &&
         (memcmp(agg, r->agg_last, sizeof agg) == 0)) {
       /* the same verdicts to an unchanged memory: nothing would change
-       * (the header); counted as given */
-      for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
-        if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
-          canfdi_count_inc(&r->diag.reports);
-        }
-      }
+       * (the header); counted as given (a DTC beyond the memory's table
+       * has no index, so every entry counted is one of its DTCs) */
+      canfdi_count_add(&r->diag.reports, n_agg);
     } else {
       for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
         if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
@@ -140,28 +152,27 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
     r->changes_last = dtc->changes;
     /* Source 3: the input supervision's monitors (raw per-step results),
      * combined per DTC: several monitors share U1A50/U1A51, whose
-     * debouncer must see one report per step (a failure dominates) */
-    for (j = 0U; j < CANFDI_CFG_DTC_MAX_DTCS; j++) {
-      agg[j] = CANFDI_DIAG_REPORT_NONE;
-    }
-    for (j = 0U; j < (uint32_t)CANFDI_RX_MON_COUNT; j++) {
+     * debouncer must see one report per step (a failure dominates). The
+     * DTCs to report are collected as bits, then reported in table order
+     * (lowest index first). */
+    act = in->com->prefailed | in->com->prepassed;
+    for (j = 0U; (j < (uint32_t)CANFDI_RX_MON_COUNT) && ((act >> j) != 0U); j++) {
       const uint32_t bit = UINT32_C(1) << j;
       const uint8_t idx = r->com_dtc[j];
-      if ((idx != CANFDI_DTC_NONE) && (((in->com->prefailed | in->com->prepassed) & bit) != 0U)) {
+      if (((act & bit) != 0U) && (idx != CANFDI_DTC_NONE)) {
+        touched |= UINT32_C(1) << idx;
         if ((in->com->prefailed & bit) != 0U) {
-          agg[idx] = CANFDI_DIAG_REPORT_FAILED;
-        } else if (agg[idx] != CANFDI_DIAG_REPORT_FAILED) {
-          agg[idx] = CANFDI_DIAG_REPORT_PASSED;
-        } else {
-          /* a failure of another monitor of the same code dominates */
+          failed |= UINT32_C(1) << idx;
         }
       }
     }
-    for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
-      if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
-        rc += report(r, dtc, (uint8_t)j,
-                     (agg[j] > 0) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED,
-                     in->ff);
+    while (touched != 0U) {
+      const uint32_t low = touched & (0U - touched);
+      const uint32_t idx = 31U - canfdi_clz32(low);
+      touched &= touched - 1U;
+      if (idx < (uint32_t)dtc->n_dtcs) {
+        rc += report(r, dtc, (uint8_t)idx,
+                     ((failed & low) != 0U) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED, in->ff);
       }
     }
     canfdi_count_inc(&r->diag.steps);
