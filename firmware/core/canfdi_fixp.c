@@ -82,8 +82,9 @@ static uint32_t udiv_rnd_u32(uint32_t num, uint32_t den)
  * instead of libgcc's 64-bit division, which costs several times as much.
  * Scaling and overflow: num 2^s < den 2^(32+s) < 2^64 loses no bit; each
  * digit estimate exceeds the true digit by at most 2 and is corrected
- * before use, so every partial remainder is below d < 2^32 and the
- * products q dl are formed only for q < 2^16.
+ * before use, so every partial remainder is below d < 2^32 (formed in 64
+ * bits: no unsigned wrap) and the products q dl are formed only for
+ * q < 2^16.
  */
 static uint32_t udiv_u64_u32(uint64_t num, uint32_t den, uint32_t *rem)
 {
@@ -106,7 +107,9 @@ static uint32_t udiv_u64_u32(uint64_t num, uint32_t den, uint32_t *rem)
       break;
     }
   }
-  m = ((n1 << 16) | n0h) - (q1 * d); /* modulo 2^32: the remainder, < d */
+  /* the partial remainder n1 2^16 + n0h - q1 d is in [0, d): formed in 64
+   * bits, so that neither the shift nor the product wraps */
+  m = (uint32_t)((((uint64_t)n1 << 16) | n0h) - ((uint64_t)q1 * d));
   q0 = m / dh;
   r = m - (q0 * dh);
   while ((q0 > 0xFFFFU) || ((q0 * dl) > ((r << 16) | n0l))) {
@@ -116,7 +119,7 @@ static uint32_t udiv_u64_u32(uint64_t num, uint32_t den, uint32_t *rem)
       break;
     }
   }
-  *rem = (((m << 16) | n0l) - (q0 * d)) >> s;
+  *rem = (uint32_t)(((((uint64_t)m << 16) | n0l) - ((uint64_t)q0 * d)) >> s);
   return (q1 << 16) | q0;
 }
 

@@ -167,7 +167,7 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
       }
     }
     while (touched != 0U) {
-      const uint32_t low = touched & (0U - touched);
+      const uint32_t low = touched & ~(touched - 1U); /* the lowest set bit */
       const uint32_t idx = 31U - canfdi_clz32(low);
       touched &= touched - 1U;
       if (idx < (uint32_t)dtc->n_dtcs) {
