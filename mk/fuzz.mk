@@ -9,6 +9,9 @@
 #   make fuzz FUZZ_RUNS=10000000
 #                      each harness until it has run that many inputs (no
 #                      time limit); libFuzzer's pulse lines show progress
+#   FUZZ_TIMEOUT=10    seconds one input may take before it counts as a
+#                      hang (wall clock: a run at low priority beside other
+#                      work can be starved that long, so give it 30 or more)
 #   Every fuzzing run appends a line to $(BUILD)/bench/fuzz.tsv: harness,
 #   commit, executions, seconds, executions per second, new inputs, result
 #   (ok, crash, or interrupted: stopped by a signal).
@@ -30,6 +33,7 @@
 FUZZ_CC ?= clang
 FUZZ_SECONDS ?= 60
 FUZZ_RUNS ?=
+FUZZ_TIMEOUT ?= 10
 FUZZ_TEST_SECONDS ?= 12
 FUZZ_DIR := tests/fuzz
 FUZZ_OUT := $(BUILD)/fuzz
@@ -124,7 +128,7 @@ fuzz_run = set -eo pipefail; h=$(1); \
 	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) -runs=0 $$dirs 2>$(FUZZ_OUT)/$$h.replay.log || { cat $(FUZZ_OUT)/$$h.replay.log; exit 1; }; \
 	$(if $(3),limit="-runs=$(3)"; echo "== fuzz_$$h: $(3) executions";,limit="-max_total_time=$(2)"; echo "== fuzz_$$h: $(2) s";) \
 	t0=$$(date +%s); rc=0; \
-	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) $$limit -print_final_stats=1 -timeout=10 -rss_limit_mb=1024 \
+	$(or $(FUZZ_CMD_$(1)),$(FUZZ_OUT)/fuzz_$(1)) $$limit -print_final_stats=1 -timeout=$(FUZZ_TIMEOUT) -rss_limit_mb=1024 \
 	  -artifact_prefix=$(FUZZ_OUT)/crash/$$h- $(FUZZ_OUT)/found/$$h $$dirs 2>&1 | tee $(FUZZ_OUT)/$$h.log | \
 	  { $(if $(3),grep -a --line-buffered -E '^#[0-9]+[[:space:]]+pulse' || true,cat >/dev/null); } || rc=$$?; \
 	stat() { grep -a -E "^stat::$$1:" $(FUZZ_OUT)/$$h.log | awk '{print $$2}'; }; \
