@@ -136,7 +136,7 @@
  * of tests/sil/scenarios/uds_workshop.scn): at most 27 800 (M4) / 59 900
  * (M0) in those steps, within the same run's maxima (32 300 / 62 800).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 33 181 / 71 008,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 33 061 / 71 522,
  * with ~10 % margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
