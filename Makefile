@@ -18,6 +18,7 @@ include mk/flags.mk
 
 # Firmware sources (the port layer is built per target, not here).
 FW_SRC := $(sort $(shell find firmware -name '*.c' -not -path 'firmware/port/*' 2>/dev/null))
+FW_HDR := $(sort $(shell find firmware -name '*.h' -not -path 'firmware/port/*' 2>/dev/null))
 FW_HOST_OBJ := $(FW_SRC:%.c=$(BUILD)/host/%.o)
 
 # Extra sources linked into every unit test (e.g. the host_sim plant

@@ -50,7 +50,7 @@ PIL_ELFS := $(foreach m,$(PIL_MACHINES),$(PIL_DIR)/pil_step_$(m).elf)
 
 # Every firmware header is a prerequisite: a struct or an inline function
 # changed in a header must rebuild the images that PIL measures.
-PIL_FW_HDR := $(sort $(shell find firmware -name '*.h' 2>/dev/null))
+PIL_FW_HDR := $(FW_HDR) $(sort $(wildcard firmware/port/cortexm/*.h))
 
 define PIL_RULES
 $(PIL_DIR)/pil_step_$(1).elf: tests/pil/pil_step.c $(FW_SRC) firmware/port/cortexm/canfdi_startup.c $(TGT_LDSCRIPTS) \

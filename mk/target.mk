@@ -21,8 +21,7 @@ FW_TARGET_EXTRA_SRC ?=
 TGT_PORT_APP_SRC := $(PIL_PORT_APP_SRC)
 TGT_PORT_SRC := $(filter-out $(TGT_PORT_APP_SRC),$(sort $(wildcard firmware/port/cortexm/*.c)))
 TGT_FW_SRC := $(FW_SRC) $(TGT_PORT_SRC) $(FW_TARGET_EXTRA_SRC)
-TGT_FW_HDR := $(sort $(shell find firmware -name '*.h' -not -path 'firmware/port/*' 2>/dev/null) \
-                     $(wildcard firmware/port/cortexm/*.h))
+TGT_FW_HDR := $(FW_HDR) $(sort $(wildcard firmware/port/cortexm/*.h))
 TGT_MAIN := tests/target/guard_main.c
 # Generated firmware headers (DBC codec, fault tables): their guard calls are
 # generated as well, into $(TGT_GEN_CALLS), which guard_main.c includes.

@@ -70,38 +70,29 @@ int32_t canfdi_svf_init(canfdi_svf_t *f, const canfdi_svf_cfg_t *cfg)
     p /= g;
     q /= g;
     if ((p <= q) && ((p + q) < SVF_PQ_LIMIT)) {
-      /* G_ij = p A_ij / (p + q)^n with A = q^(n-1) adj(I - hM)(h = p/q):
-       * every term is an exact integer below 2^62 (p, q < 2^20). */
+      /* The last row of G: G_nj = p A_nj / (p + q)^n with
+       * A = q^(n-1) adj(I - hM) (h = p/q); every term is an exact integer
+       * below 2^62 (p, q < 2^20). The step needs no other row. */
       const int64_t pi = (int64_t)p;
       const int64_t qi = (int64_t)q;
-      int64_t a[CANFDI_SVF_MAX_ORDER][CANFDI_SVF_MAX_ORDER] = {{0}};
+      int64_t a[CANFDI_SVF_MAX_ORDER] = {0};
       uint64_t den = (p + q) * (p + q);
       unsigned j;
       if (cfg->order == 2U) {
-        a[0][0] = qi + 2 * pi;
-        a[0][1] = pi;
-        a[1][0] = -pi;
-        a[1][1] = qi;
+        a[0] = -pi;
+        a[1] = qi;
       } else {
         den *= (p + q);
-        a[0][0] = qi * qi + 3 * pi * qi + 3 * pi * pi;
-        a[0][1] = pi * qi + 3 * pi * pi;
-        a[0][2] = pi * pi;
-        a[1][0] = -pi * pi;
-        a[1][1] = qi * qi + 3 * pi * qi;
-        a[1][2] = pi * qi;
-        a[2][0] = -pi * qi;
-        a[2][1] = -3 * pi * qi - pi * pi;
-        a[2][2] = qi * qi;
+        a[0] = -pi * qi;
+        a[1] = -3 * pi * qi - pi * pi;
+        a[2] = qi * qi;
       }
       f->cfg = *cfg;
       if (f->cfg.outputs == 0U) {
         f->cfg.outputs = CANFDI_SVF_OUT_ALL;
       }
-      /* the last row of G; the other increments follow from it (step) */
       for (j = 0U; j < CANFDI_SVF_MAX_ORDER; j++) {
-        const int64_t an = a[cfg->order - 1U][j];
-        f->g_q31[j] = (an == 0) ? 0 : svf_ratio_q31(pi * an, den);
+        f->g_q31[j] = (a[j] == 0) ? 0 : svf_ratio_q31(pi * a[j], den);
       }
       /* h = p / q in Q31; h = 1 (wc T / 2 = 1) saturates to 1 - 2^-31 */
       f->h_q31 = (p == q) ? INT32_MAX : svf_ratio_q31(pi, q);
