@@ -197,9 +197,8 @@ static void r1_est_mean(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, cons
     const int32_t w = canfdi_add_s32_sat(
         canfdi_sub_s32_sat(m->r1_est_w_q16, canfdi_mul_s32_qn(m->r1_est_w_q16, in->est_dcm->cfg.forget_q31, 31U)),
         CANFDI_Q16_ONE);
-    /* 1 / W in Q31: 2^47 / W_q16, saturated below 1 */
-    const int64_t inv = ((int64_t)1 << 47) / (int64_t)w;
-    const canfdi_q31_t al = (inv > (int64_t)INT32_MAX) ? (canfdi_q31_t)INT32_MAX : (canfdi_q31_t)inv;
+    /* 1 / W in Q31: 2^47 / W_q16 (W >= 1), saturated below 1 */
+    const canfdi_q31_t al = canfdi_div_s64_sat_s32((int64_t)1 << 47, w);
     const int64_t d = canfdi_sub_s64_sat((int64_t)pd->r_q16[0] * 65536, m->r1_est_q32);
     m->r1_est_q32 = canfdi_add_s64_sat(m->r1_est_q32, canfdi_mul_s64_q31(d, al));
     m->r1_est_w_q16 = w;

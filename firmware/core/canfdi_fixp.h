@@ -32,8 +32,10 @@
  * no divide, no 64-bit multiply) and Cortex-M4 (SMULL/UMULL, UDIV/SDIV).
  * 64-bit multiplies on M0+ call libgcc's __aeabi_lmul; 64-bit shifts by a
  * run-time amount call __aeabi_llsl/__aeabi_llsr/__aeabi_lasr on M0+ (they
- * are inline code on M4); divisions call __aeabi_uidivmod (M0+) or
- * __aeabi_uldivmod (64-bit, both cores). No routine uses floating point.
+ * are inline code on M4); 32-bit divisions are UDIV on M4 and
+ * __aeabi_uidivmod on M0+, and the 64-bit ones are long division by 16-bit
+ * digits on them (canfdi_fixp.c: two 32-bit divisions, never libgcc's
+ * 64-bit division). No routine uses floating point.
  * Everything in this header is static inline and branch-light, meant for the
  * 1 ms path; the divisions and square roots live in canfdi_fixp.c.
  *
@@ -55,7 +57,9 @@
  *   isqrt_u64           478 / 521 / 568     1111 / 1171 / 1235
  *   q31_sqrt            16 / 266 / 598      20 / 592 / 1280
  *
- * The add_s64_sat row is the portable form's (CANFDI_FIXP_PORTABLE) with
+ * The q31_div row was measured with libgcc's 64-bit division, which the
+ * 64/32 long division has since replaced (cheaper on both cores; not
+ * re-measured). The add_s64_sat row is the portable form's (CANFDI_FIXP_PORTABLE) with
  * its call; the default form through the overflow builtins is an
  * ADDS/ADCS pair and a branch on the overflow flag, inline.
  * Code size of canfdi_fixp.c (-Os): 444 bytes (M4), 492 bytes (M0+), plus
@@ -605,9 +609,8 @@ canfdi_q15_t canfdi_q15_div(canfdi_q15_t num, canfdi_q15_t den);
 /*
  * sat(round(num / den)) in Q31. Scaling and overflow: as canfdi_q15_div
  * with |num| * 2^31 <= 2^62 in uint64_t.
- * Cost: one 64/64 unsigned division (__aeabi_uldivmod on both cores; it
- * loops over the quotient bits, so budget it as the most expensive call in
- * this module), plus a few 64-bit shifts and compares.
+ * Cost: canfdi_div_s32_qn with n = 31: a 64/32 long division (two 32-bit
+ * divisions) and a few 64-bit shifts and compares.
  */
 canfdi_q31_t canfdi_q31_div(canfdi_q31_t num, canfdi_q31_t den);
 
@@ -619,10 +622,23 @@ canfdi_q31_t canfdi_q31_div(canfdi_q31_t num, canfdi_q31_t den);
  * |num| * 2^n >= 2^63, so any n is exact. Saturates to INT32_MIN/MAX.
  * Rounding: to nearest, ties away from zero. Division by zero: see above.
  * Domain: n 0..31 specified; any n is defined.
- * Cost: one division, 32/32 (cheap path, when |num| * 2^n < 2^32) or 64/64
- * (__aeabi_uldivmod), plus a 64-bit shift by a run-time amount.
+ * Cost: one division, 32/32 (cheap path, when |num| * 2^n < 2^32) or 64/32
+ * (long division by 16-bit digits: two 32-bit divisions), plus a 64-bit
+ * shift by a run-time amount.
  */
 int32_t canfdi_div_s32_qn(int32_t num, int32_t den, unsigned n);
+
+/*
+ * sat(trunc(num / den)): the quotient of two 64-bit integers rounded toward
+ * zero (as C's '/'), saturated to INT32_MIN/MAX. Division by zero: see
+ * above. Scaling and overflow: magnitudes in uint64_t (INT64_MIN exact);
+ * saturation is decided before dividing (|num| >= |den| 2^31), so the
+ * quotient computed is below 2^31.
+ * Cost: no 64-bit division: one 64/32 division (two 32-bit divisions) when
+ * |den| < 2^32, else that and two 32x32 products (the divisor's top word
+ * gives the quotient within one).
+ */
+int32_t canfdi_div_s64_sat_s32(int64_t num, int64_t den);
 
 /*
  * floor(sqrt(x)), exact for every uint32_t.

@@ -98,8 +98,8 @@ static void fast_update(canfdi_est_thr_t *e, int32_t i_q16, int32_t a_q16, int32
       const int64_t an = canfdi_sub_s64_sat(ss * cr, cx * sr); /* Q48 */
       const int64_t bn = canfdi_sub_s64_sat(cc * sr, cx * cr);
       /* Q48 / Q32 = Q16 */
-      const int32_t b_q16 = canfdi_sat_s64_to_s32(bn / det);
-      e->f_spring_dev_q16 = canfdi_sat_s64_to_s32(an / det);
+      const int32_t b_q16 = canfdi_div_s64_sat_s32(bn, det);
+      e->f_spring_dev_q16 = canfdi_div_s64_sat_s32(an, det);
       e->f_fric_dev_q16 = (c->friction_nom_q16 > 0) ? canfdi_div_s32_qn(b_q16, c->friction_nom_q16, 16U) : 0;
     }
   }

@@ -117,7 +117,8 @@
  *
  * Cost per step: 4 SVF steps of order 3 every step, plus one RLS update
  * (4 parameters, or 5 for the mechanical part) on each of two steps out of
- * `decim`; the fast test adds ~40 multiplies and 3 64-bit divisions per
+ * `decim`; the fast test adds ~40 multiplies and 3 divisions (64-bit
+ * dividends, core/canfdi_fixp.h: no libgcc 64-bit division) per
  * mechanical update: canfdi_svf.h and canfdi_rls.h state their cost per
  * call; `make bench-pil-profile` measures the whole step in the
  * application, per module and function (build/bench/pil_profile.json).

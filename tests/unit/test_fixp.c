@@ -876,6 +876,43 @@ START_TEST(test_div_s32_qn)
 }
 END_TEST
 
+/* canfdi_div_s64_sat_s32 against the host's __int128 division (C's
+ * truncation): every pair of 64-bit edges, quotients near 2^31 on both
+ * sides of the saturation, divisors on both sides of 2^32 (the 64/32 and
+ * the top-word paths) and random operands of every bit length. */
+static void check_div_s64(int64_t num, int64_t den)
+{
+  const i128 want = (den == 0) ? ref_div0(num, INT32_MIN, INT32_MAX) : ((i128)num / (i128)den);
+  const int32_t got = canfdi_div_s64_sat_s32(num, den);
+  EXPECT(got == ref_sat32(want), "div_s64_sat_s32(%lld, %lld) = %ld", (long long)num, (long long)den, (long)got);
+}
+
+START_TEST(test_div_s64_sat_s32)
+{
+  size_t i;
+  size_t j;
+  unsigned k;
+  rng_seed(0x64D1U);
+  for (i = 0U; i < N_EDGE64; i++) {
+    for (j = 0U; j < N_EDGE64; j++) {
+      check_div_s64(EDGE64[i], EDGE64[j]);
+    }
+  }
+  for (k = 0U; k < 200000U; k++) {
+    const int64_t den = rnd_s64();
+    /* a quotient within a few units of a random 32-bit value, or of the
+     * saturation limits, and the remainder anywhere in [0, |den|) */
+    const int64_t qt = ((k & 3U) == 0U) ? (((k & 4U) != 0U) ? INT32_MAX : INT32_MIN) : (int64_t)rnd_s32();
+    const i128 num = ((i128)qt + (i128)((int64_t)(rnd64() % 5U) - 2)) * den + (i128)(rnd64() % ((uint64_t)((den < 0) ? -(den + 1) : den) + 1U));
+    if ((num >= (i128)INT64_MIN) && (num <= (i128)INT64_MAX)) {
+      check_div_s64((int64_t)num, den);
+    }
+    check_div_s64(rnd_s64(), rnd_s64());
+  }
+  DONE();
+}
+END_TEST
+
 /* ------------------------------------------------------------------------ */
 /* TCase sqrt                                                               */
 /* ------------------------------------------------------------------------ */
@@ -1136,6 +1173,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_div_facts);
   tcase_add_test(tc, test_q31_div);
   tcase_add_loop_test(tc, test_div_s32_qn, 0, N_SHIFT_GROUPS);
+  tcase_add_test(tc, test_div_s64_sat_s32);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("sqrt");
