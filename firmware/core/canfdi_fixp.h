@@ -30,7 +30,8 @@
  *
  * Cost. Stated per function for Cortex-M0+ (ARMv6-M: 32x32->32 MULS only,
  * no divide, no 64-bit multiply) and Cortex-M4 (SMULL/UMULL, UDIV/SDIV).
- * 64-bit multiplies on M0+ call libgcc's __aeabi_lmul; 64-bit shifts by a
+ * 32x32->64 products on M0+ are built from 16-bit halves (below), and only
+ * products of 64-bit operands call libgcc's __aeabi_lmul; 64-bit shifts by a
  * run-time amount call __aeabi_llsl/__aeabi_llsr/__aeabi_lasr on M0+ (they
  * are inline code on M4); 32-bit divisions are UDIV on M4 and
  * __aeabi_uidivmod on M0+, and the 64-bit ones are long division by 16-bit
@@ -211,6 +212,106 @@ static inline int64_t canfdi_asr64_rnd(int64_t x, unsigned n)
     y = canfdi_asr64(x, s) + (int64_t)(((uint64_t)x >> (s - 1U)) & 1U);
   }
   return y;
+}
+
+/*
+ * 32x32->64 products. ARMv7-M has UMULL/SMULL, which the plain C products
+ * below compile to. ARMv6-M (Cortex-M0/M0+) has only a 32x32->32 MULS, and
+ * a 64-bit product in C calls libgcc's __aeabi_lmul, which multiplies 64 by
+ * 64 bits (~45 instructions with its call); the *_h16 forms build the
+ * product from four 16x16->32 multiplies instead, inline, and are what
+ * canfdi_umull32, canfdi_umulhi32, canfdi_smull32 and canfdi_usmull32 use
+ * there. Both forms are exact, so every core gives the same bits
+ * (tests/unit/test_fixp checks the halves against the host's products).
+ * Scaling and overflow: exact, cannot overflow (stated per function).
+ */
+
+/* Unsigned: "mid" <= 2^32 - 1. */
+static inline uint64_t canfdi_umull32_h16(uint32_t a, uint32_t b)
+{
+  const uint32_t al = a & 0xFFFFU;
+  const uint32_t ah = a >> 16;
+  const uint32_t bl = b & 0xFFFFU;
+  const uint32_t bh = b >> 16;
+  const uint32_t ll = al * bl;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (ah * bl);
+  const uint32_t hi = (ah * bh) + (lh >> 16) + (mid >> 16);
+  return ((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU));
+}
+
+/* The unsigned product's high word only (the low word is not assembled). */
+static inline uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
+{
+  const uint32_t al = a & 0xFFFFU;
+  const uint32_t ah = a >> 16;
+  const uint32_t bl = b & 0xFFFFU;
+  const uint32_t bh = b >> 16;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = ((al * bl) >> 16) + (lh & 0xFFFFU) + (ah * bl);
+  return (ah * bh) + (lh >> 16) + (mid >> 16);
+}
+
+/* Signed, from signed high halves (floor shifts, -2^15 .. 2^15 - 1) and
+ * unsigned low halves: ah bh < 2^30, each cross product below 2^31 in
+ * magnitude (their sum below 2^32, in 64 bits), al bl < 2^32; the sum of
+ * the scaled terms is the exact product. */
+static inline int64_t canfdi_smull32_h16(int32_t a, int32_t b)
+{
+  const int32_t ah = canfdi_asr32(a, 16U);
+  const int32_t bh = canfdi_asr32(b, 16U);
+  const uint32_t al = (uint32_t)a & 0xFFFFU;
+  const uint32_t bl = (uint32_t)b & 0xFFFFU;
+  const int64_t cross = (int64_t)(ah * (int32_t)bl) + (int64_t)((int32_t)al * bh);
+  return (((int64_t)(ah * bh) * 4294967296LL) + (cross * 65536)) + (int64_t)(al * bl);
+}
+
+/* Unsigned times signed: the unsigned product of a and b's bit pattern,
+ * less a 2^32 when b < 0 (modulo 2^64); a b lies in [-2^63, 2^64 / 2). */
+static inline int64_t canfdi_usmull32_h16(uint32_t a, int32_t b)
+{
+  const uint64_t p = canfdi_umull32_h16(a, (uint32_t)b);
+  return canfdi_wrap_u64_to_s64((b < 0) ? (p - ((uint64_t)a << 32)) : p);
+}
+
+/* a b for unsigned 32-bit operands: UMULL (ARMv6-M: the halves). */
+static inline uint64_t canfdi_umull32(uint32_t a, uint32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_umull32_h16(a, b);
+#else
+  return (uint64_t)a * (uint64_t)b;
+#endif
+}
+
+/* floor(a b / 2^32) for unsigned 32-bit operands: UMULL's high word. */
+static inline uint32_t canfdi_umulhi32(uint32_t a, uint32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_umulhi32_h16(a, b);
+#else
+  return (uint32_t)(((uint64_t)a * (uint64_t)b) >> 32);
+#endif
+}
+
+/* a b for signed 32-bit operands: SMULL (ARMv6-M: the halves). */
+static inline int64_t canfdi_smull32(int32_t a, int32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_smull32_h16(a, b);
+#else
+  return (int64_t)a * (int64_t)b;
+#endif
+}
+
+/* a b for an unsigned a and a signed b (ARMv6-M: the halves). */
+static inline int64_t canfdi_usmull32(uint32_t a, int32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_usmull32_h16(a, b);
+#else
+  return (int64_t)a * (int64_t)b;
+#endif
 }
 
 /*
@@ -485,12 +586,12 @@ static inline canfdi_q31_t canfdi_q31_abs(canfdi_q31_t a)
  * sat(floor(a * b / 2^31)) in Q31.
  * Scaling and overflow: Q31 x Q31 -> Q62 product in 64 bits (exact), floor
  * shift by 31 -> Q31; only (-1) x (-1) saturates. Rounding: floor.
- * Cost: one 32x32->64 multiply (SMULL on M4, __aeabi_lmul on M0+), one
+ * Cost: one 32x32->64 multiply (SMULL on M4, 16-bit halves on M0+), one
  * constant 64-bit shift, two compares.
  */
 static inline canfdi_q31_t canfdi_q31_mul(canfdi_q31_t a, canfdi_q31_t b)
 {
-  return canfdi_sat_s64_to_s32(canfdi_asr64((int64_t)a * (int64_t)b, 31U));
+  return canfdi_sat_s64_to_s32(canfdi_asr64(canfdi_smull32(a, b), 31U));
 }
 
 /*
@@ -500,7 +601,7 @@ static inline canfdi_q31_t canfdi_q31_mul(canfdi_q31_t a, canfdi_q31_t b)
  */
 static inline canfdi_q31_t canfdi_q31_mul_rnd(canfdi_q31_t a, canfdi_q31_t b)
 {
-  return canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)a * (int64_t)b, 31U));
+  return canfdi_sat_s64_to_s32(canfdi_asr64_rnd(canfdi_smull32(a, b), 31U));
 }
 
 /* ------------------------------------------------------------------------ */
@@ -519,7 +620,7 @@ static inline canfdi_q31_t canfdi_q31_mul_rnd(canfdi_q31_t a, canfdi_q31_t b)
  */
 static inline int32_t canfdi_mul_s32_qn(int32_t a, int32_t b, unsigned n)
 {
-  return canfdi_sat_s64_to_s32(canfdi_asr64_rnd((int64_t)a * (int64_t)b, n));
+  return canfdi_sat_s64_to_s32(canfdi_asr64_rnd(canfdi_smull32(a, b), n));
 }
 
 /*
@@ -532,15 +633,15 @@ static inline int32_t canfdi_mul_s32_qn(int32_t a, int32_t b, unsigned n)
  * result is exactly round(a*b / 2^31). The final add saturates to
  * INT64_MIN/MAX (only when |a| is near 2^63 and |b| near 1).
  * Rounding: half up. Cost: two 32x32->64 multiplies (M4: SMULL + a signed x
- * unsigned 64-bit product; M0+: two __aeabi_lmul), constant shifts, two
+ * unsigned 64-bit product; M0+: their 16-bit halves), constant shifts, two
  * 64-bit adds with saturation checks.
  */
 static inline int64_t canfdi_mul_s64_q31(int64_t a, canfdi_q31_t b)
 {
-  const int64_t ah = canfdi_asr64(a, 32U);                   /* in int32 range */
-  const int64_t al = (int64_t)((uint64_t)a & 0xFFFFFFFFU);   /* in [0, 2^32) */
-  const int64_t hi = ah * (int64_t)b;                        /* |hi| <= 2^62 */
-  const int64_t lo = canfdi_asr64_rnd(al * (int64_t)b, 31U); /* |lo| <= 2^32 */
+  const int32_t ah = (int32_t)canfdi_asr64(a, 32U);             /* in int32 range */
+  const uint32_t al = (uint32_t)((uint64_t)a & 0xFFFFFFFFU);     /* in [0, 2^32) */
+  const int64_t hi = canfdi_smull32(ah, b);                      /* |hi| <= 2^62 */
+  const int64_t lo = canfdi_asr64_rnd(canfdi_usmull32(al, b), 31U); /* |lo| <= 2^32 */
   /* 2*hi may overflow on its own while 2*hi + lo does not: add hi + lo first
    * (exact), then saturate once. */
   return canfdi_add_s64_sat(hi, hi + lo);

@@ -18,8 +18,8 @@
  * implementation-defined shifts of negative values.
  * Cost (executed instructions, arm-none-eabi-gcc 12 -Os, inline): clz32 one
  * CLZ on ARMv7-M, ~14 on ARMv6-M; clz64 two to four more; mla_hi_rnd
- * SMULL + ADDS/ADC + ADD on ARMv7-M (4), a libgcc __aeabi_lmul call on
- * ARMv6-M (~30). RAM: none.
+ * SMULL + ADDS/ADC + ADD on ARMv7-M (4), the 16-bit halves of
+ * canfdi_smull32 (core/canfdi_fixp.h) and an add on ARMv6-M. RAM: none.
  */
 #ifndef CANFDI_INTRIN_H
 #define CANFDI_INTRIN_H
@@ -72,78 +72,6 @@ static inline unsigned canfdi_clz64(uint64_t x)
 {
   const uint32_t hi = (uint32_t)(x >> 32);
   return (hi != 0U) ? canfdi_clz32(hi) : (32U + canfdi_clz32((uint32_t)x));
-}
-
-/*
- * The 32x32->64 products in plain 16-bit halves: four 16x16->32 multiplies
- * and the carries, for ARMv6-M, which has no UMULL/SMULL (libgcc's
- * __aeabi_lmul would multiply 64 by 64 bits). canfdi_umull32,
- * canfdi_umulhi32 and canfdi_smull32 use them there and the instructions
- * elsewhere; both are exact, so every core gives the same bits
- * (tests/unit/test_fixp checks the halves against the host's products).
- * Scaling and overflow: exact, cannot overflow ("mid" <= 2^32 - 1).
- */
-static inline uint64_t canfdi_umull32_h16(uint32_t a, uint32_t b)
-{
-  const uint32_t al = a & 0xFFFFU;
-  const uint32_t ah = a >> 16;
-  const uint32_t bl = b & 0xFFFFU;
-  const uint32_t bh = b >> 16;
-  const uint32_t ll = al * bl;
-  const uint32_t lh = al * bh;
-  const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (ah * bl);
-  const uint32_t hi = (ah * bh) + (lh >> 16) + (mid >> 16);
-  return ((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU));
-}
-
-/* The high word only (the low word is not assembled). */
-static inline uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
-{
-  const uint32_t al = a & 0xFFFFU;
-  const uint32_t ah = a >> 16;
-  const uint32_t bl = b & 0xFFFFU;
-  const uint32_t bh = b >> 16;
-  const uint32_t lh = al * bh;
-  const uint32_t mid = ((al * bl) >> 16) + (lh & 0xFFFFU) + (ah * bl);
-  return (ah * bh) + (lh >> 16) + (mid >> 16);
-}
-
-/* Signed: the unsigned product with its high word corrected for the signs. */
-static inline int64_t canfdi_smull32_h16(int32_t a, int32_t b)
-{
-  const uint64_t p = canfdi_umull32_h16((uint32_t)a, (uint32_t)b);
-  const uint32_t c = ((a < 0) ? (uint32_t)b : 0U) + ((b < 0) ? (uint32_t)a : 0U);
-  return canfdi_wrap_u64_to_s64(p - ((uint64_t)c << 32));
-}
-
-/* a b for unsigned 32-bit operands: UMULL (ARMv6-M: the halves). */
-static inline uint64_t canfdi_umull32(uint32_t a, uint32_t b)
-{
-#if defined(__ARM_ARCH_6M__)
-  return canfdi_umull32_h16(a, b);
-#else
-  return (uint64_t)a * (uint64_t)b;
-#endif
-}
-
-/* floor(a b / 2^32) for unsigned 32-bit operands: UMULL's high word. */
-static inline uint32_t canfdi_umulhi32(uint32_t a, uint32_t b)
-{
-#if defined(__ARM_ARCH_6M__)
-  return canfdi_umulhi32_h16(a, b);
-#else
-  return (uint32_t)(((uint64_t)a * (uint64_t)b) >> 32);
-#endif
-}
-
-/* a b for signed 32-bit operands: SMULL (ARMv6-M: the halves). */
-static inline int64_t canfdi_smull32(int32_t a, int32_t b)
-{
-#if defined(__ARM_ARCH_6M__)
-  return canfdi_smull32_h16(a, b);
-#else
-  return (int64_t)a * (int64_t)b;
-#endif
 }
 
 /*

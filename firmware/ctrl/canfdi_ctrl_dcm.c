@@ -102,7 +102,7 @@ int32_t canfdi_ctrl_dcm_init(canfdi_ctrl_dcm_t *c, const canfdi_ctrl_dcm_cal_t *
  * with saturation. */
 static int32_t dcm_mac2_q16(int32_t a, int32_t b, int32_t c, int32_t d)
 {
-  const int64_t s = canfdi_add_s64_sat((int64_t)a * (int64_t)b, (int64_t)c * (int64_t)d);
+  const int64_t s = canfdi_add_s64_sat(canfdi_smull32(a, b), canfdi_smull32(c, d));
   return canfdi_sat_s64_to_s32(canfdi_asr64_rnd(s, 16U));
 }
 

@@ -111,7 +111,7 @@ int32_t canfdi_ctrl_thr_ff_q16(const canfdi_ctrl_thr_t *c, int32_t ref_rad_q16, 
   if (cal->spring_comp) {
     const int32_t d = canfdi_sub_s32_sat(ref_rad_q16, cal->limp_home_rad_q16);
     const int64_t p = (int64_t)cal->pretension_Nm_q16 * 65536;
-    int64_t pre = (int64_t)c->pre_slope_q16 * (int64_t)d; /* exact, |.| <= 2^62 */
+    int64_t pre = canfdi_smull32(c->pre_slope_q16, d); /* exact, |.| <= 2^62 */
     if (pre > p) {
       pre = p;
     } else if (pre < -p) {
@@ -119,7 +119,7 @@ int32_t canfdi_ctrl_thr_ff_q16(const canfdi_ctrl_thr_t *c, int32_t ref_rad_q16, 
     } else {
       /* on the ramp */
     }
-    t = canfdi_add_s64_sat((int64_t)cal->spring_Nm_rad_q16 * (int64_t)d, pre);
+    t = canfdi_add_s64_sat(canfdi_smull32(cal->spring_Nm_rad_q16, d), pre);
   }
   if (cal->friction_comp) {
     const int64_t tc = (int64_t)cal->friction_Nm_q16 * 65536;

@@ -136,7 +136,7 @@ int32_t canfdi_pi_step_q16(canfdi_pi_t *pi, int32_t ref_q16, int32_t meas_q16, i
 {
   const int32_t e = canfdi_sub_s32_sat(ref_q16, meas_q16);
   const int64_t ff = pi_q16_to_q32(ff_q16);
-  const int64_t p = (int64_t)pi->kp_q16 * (int64_t)e; /* Q32.32, |p| <= 2^62 */
+  const int64_t p = canfdi_smull32(pi->kp_q16, e); /* Q32.32, |p| <= 2^62 */
   const int32_t dy = pi->primed ? canfdi_sub_s32_sat(meas_q16, pi->y_prev_q16) : 0;
   const int64_t e64 = (int64_t)e;
   int64_t inc = 0;
@@ -148,7 +148,7 @@ int32_t canfdi_pi_step_q16(canfdi_pi_t *pi, int32_t ref_q16, int32_t meas_q16, i
    * (c = 0) keeps D = 0 and skips the multiplies. */
   if (pi->dc_q16 != 0) {
     pi->d_q32 = canfdi_sub_s64_sat(canfdi_mul_s64_q31(pi->d_q32, pi->da_q31),
-                                   (int64_t)pi->dc_q16 * (int64_t)dy);
+                                   canfdi_smull32(pi->dc_q16, dy));
   }
   pi->y_prev_q16 = meas_q16;
   pi->primed = true;
@@ -157,7 +157,7 @@ int32_t canfdi_pi_step_q16(canfdi_pi_t *pi, int32_t ref_q16, int32_t meas_q16, i
   if ((pi->i_band_q16 == 0) ||
       ((e64 <= (int64_t)pi->i_band_q16) && (e64 >= -(int64_t)pi->i_band_q16))) {
     /* Q8.24 x Q16.16 = Q.40, rounded to Q.32. */
-    inc = canfdi_asr64_rnd((int64_t)pi->kit_q24 * e64, 8U);
+    inc = canfdi_asr64_rnd(canfdi_smull32(pi->kit_q24, e), 8U);
   }
   i_new = canfdi_add_s64_sat(pi->i_q32, inc);
   if (pi_reject(pi, inc, canfdi_add_s64_sat(pi->pdf_q32, i_new), hold)) {

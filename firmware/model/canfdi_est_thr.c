@@ -71,11 +71,11 @@ static void fast_update(canfdi_est_thr_t *e, int32_t i_q16, int32_t a_q16, int32
   r -= (int64_t)canfdi_mul_s32_qn(c->friction_nom_q16, s_q16, 16U);
   r_q16 = canfdi_sat_s64_to_s32(r);
   r_q16 = canfdi_clamp_s32(r_q16, -FAST_TQ_MAX_Q16, FAST_TQ_MAX_Q16);
-  e->f_cc_q32 = ew_q32(e->f_cc_q32, (int64_t)cs * cs, sh);
-  e->f_cs_q32 = ew_q32(e->f_cs_q32, (int64_t)cs * s_q16, sh);
-  e->f_ss_q32 = ew_q32(e->f_ss_q32, (int64_t)s_q16 * s_q16, sh);
-  e->f_cr_q32 = ew_q32(e->f_cr_q32, (int64_t)cs * r_q16, sh);
-  e->f_sr_q32 = ew_q32(e->f_sr_q32, (int64_t)s_q16 * r_q16, sh);
+  e->f_cc_q32 = ew_q32(e->f_cc_q32, canfdi_smull32(cs, cs), sh);
+  e->f_cs_q32 = ew_q32(e->f_cs_q32, canfdi_smull32(cs, s_q16), sh);
+  e->f_ss_q32 = ew_q32(e->f_ss_q32, canfdi_smull32(s_q16, s_q16), sh);
+  e->f_cr_q32 = ew_q32(e->f_cr_q32, canfdi_smull32(cs, r_q16), sh);
+  e->f_sr_q32 = ew_q32(e->f_sr_q32, canfdi_smull32(s_q16, r_q16), sh);
   e->f_n = (e->f_n < UINT16_MAX) ? (uint16_t)(e->f_n + 1U) : e->f_n;
   e->f_age = 0U;
   if (s_q16 > 0) {

@@ -731,8 +731,8 @@ static void pdcm_ra_track(canfdi_parity_dcm_t *p, int32_t i_f, int32_t r1)
       const int32_t i_q16 = canfdi_shl32_sat(i_f, CANFDI_PARITY_DCM_I_PRESCALE);
       const int32_t r1c = canfdi_clamp_s32(r1, -PDCM_R1_SUM_CLAMP, PDCM_R1_SUM_CLAMP);
       p->blk_rn = canfdi_add_s64_sat(p->blk_rn, (int64_t)p->out.rn_q16[0]);
-      p->blk_ri = canfdi_add_s64_sat(p->blk_ri, (int64_t)r1c * i_q16);
-      p->blk_ii = canfdi_add_s64_sat(p->blk_ii, (int64_t)i_q16 * i_q16);
+      p->blk_ri = canfdi_add_s64_sat(p->blk_ri, canfdi_smull32(r1c, i_q16));
+      p->blk_ii = canfdi_add_s64_sat(p->blk_ii, canfdi_smull32(i_q16, i_q16));
     } else {
       p->blk_invalid = true;
     }

@@ -317,16 +317,16 @@ static void pthr_predict(canfdi_parity_thr_t *p, int32_t i_avg_q16, int32_t di_q
   int64_t drive;
   int64_t w;
   int64_t th;
-  drive = (int64_t)c->k_Nm_A_q24 * i_avg_q16;
-  drive = canfdi_sub_s64_sat(drive, (int64_t)c->b_Nms_q24 * w0_q16);
-  drive = canfdi_sub_s64_sat(drive, (int64_t)c->spring_Nm_rad_q24 * d_q16);
-  drive = canfdi_sub_s64_sat(drive, (int64_t)c->pretension_Nm_q24 * sat_q16);
+  drive = canfdi_smull32(c->k_Nm_A_q24, i_avg_q16);
+  drive = canfdi_sub_s64_sat(drive, canfdi_smull32(c->b_Nms_q24, w0_q16));
+  drive = canfdi_sub_s64_sat(drive, canfdi_smull32(c->spring_Nm_rad_q24, d_q16));
+  drive = canfdi_sub_s64_sat(drive, canfdi_smull32(c->pretension_Nm_q24, sat_q16));
   if ((w0 < stick_q32) && (w0 > -stick_q32) && (drive <= tc_q40) && (drive >= -tc_q40)) {
     w = 0; /* stuck: friction holds the driving torque */
   } else {
     const bool up = (w0 >= stick_q32) || ((w0 > -stick_q32) && (drive > 0));
     const int64_t net = up ? canfdi_sub_s64_sat(drive, tc_q40) : canfdi_add_s64_sat(drive, tc_q40);
-    const int64_t dw = canfdi_asr64_rnd((int64_t)p->t_over_j_q24 * pthr_q40_to_q24(net), 16U);
+    const int64_t dw = canfdi_asr64_rnd(canfdi_smull32(p->t_over_j_q24, pthr_q40_to_q24(net)), 16U);
     w = canfdi_add_s64_sat(w0, dw);
     /* friction cannot reverse the motion within a step */
     if (((w0 > 0) && (w < 0)) || ((w0 < 0) && (w > 0))) {
@@ -338,9 +338,9 @@ static void pthr_predict(canfdi_parity_thr_t *p, int32_t i_avg_q16, int32_t di_q
      * armature, independent of the potentiometers */
     int64_t emf = (int64_t)u_q16 * ((int64_t)1 << 24);
     int64_t w_el;
-    emf = canfdi_sub_s64_sat(emf, (int64_t)c->r_ohm_q24 * i_avg_q16);
-    emf = canfdi_sub_s64_sat(emf, (int64_t)p->l_over_t_q24 * di_q16);
-    w_el = canfdi_asr64_rnd((int64_t)p->inv_k_q24 * pthr_q40_to_q24(emf), 16U);
+    emf = canfdi_sub_s64_sat(emf, canfdi_smull32(c->r_ohm_q24, i_avg_q16));
+    emf = canfdi_sub_s64_sat(emf, canfdi_smull32(p->l_over_t_q24, di_q16));
+    w_el = canfdi_asr64_rnd(canfdi_smull32(p->inv_k_q24, pthr_q40_to_q24(emf)), 16U);
     w = canfdi_add_s64_sat(w, canfdi_mul_s64_q31(canfdi_sub_s64_sat(w_el, w), c->obs_emf_gain_q31));
   }
   if (w > PTHR_W_MAX_Q32) {
@@ -526,7 +526,7 @@ static void pthr_prime(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *in,
 static void pthr_current(const canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *in, pthr_step_t *s)
 {
   s->di = canfdi_sub_s32_sat(in->i_A_q16, p->i_prev_q16);
-  s->i_avg = canfdi_sat_s64_to_s32((int64_t)p->i_prev_q16 + canfdi_asr64_rnd((int64_t)s->di * p->beta_q31, 31U));
+  s->i_avg = canfdi_sat_s64_to_s32((int64_t)p->i_prev_q16 + canfdi_asr64_rnd(canfdi_smull32(s->di, p->beta_q31), 31U));
 }
 
 /* Correlation residual, low-passed; held while a sensor is out of range. */
@@ -636,7 +636,7 @@ static void pthr_observe(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *i
                                                                : s->th2;
     const int32_t e = canfdi_sub_s32_sat(y, pthr_q32_to_q16(th_p));
     th_p = canfdi_add_s64_sat(th_p, canfdi_mul_s64_q31((int64_t)e * 65536, p->l1_q31));
-    w_p = canfdi_add_s64_sat(w_p, (int64_t)p->l2_q16 * e);
+    w_p = canfdi_add_s64_sat(w_p, canfdi_smull32(p->l2_q16, e));
   }
   if (th_p < 0) {
     th_p = 0;
@@ -683,9 +683,9 @@ static int32_t pthr_arm(canfdi_parity_thr_t *p, const canfdi_parity_thr_in_t *in
   canfdi_svf_step(&p->svf_i, s->i_avg);
   canfdi_svf_step(&p->svf_th, s->th_arm_avg);
   acc = (int64_t)canfdi_svf_y_q16(&p->svf_u) * ((int64_t)1 << 24);
-  acc = canfdi_sub_s64_sat(acc, (int64_t)c->r_ohm_q24 * canfdi_svf_y_q16(&p->svf_i));
-  acc = canfdi_sub_s64_sat(acc, (int64_t)c->l_H_q24 * canfdi_svf_dy_q16(&p->svf_i));
-  acc = canfdi_sub_s64_sat(acc, (int64_t)c->k_Nm_A_q24 * canfdi_svf_dy_q16(&p->svf_th));
+  acc = canfdi_sub_s64_sat(acc, canfdi_smull32(c->r_ohm_q24, canfdi_svf_y_q16(&p->svf_i)));
+  acc = canfdi_sub_s64_sat(acc, canfdi_smull32(c->l_H_q24, canfdi_svf_dy_q16(&p->svf_i)));
+  acc = canfdi_sub_s64_sat(acc, canfdi_smull32(c->k_Nm_A_q24, canfdi_svf_dy_q16(&p->svf_th)));
   if (s->clip) {
     canfdi_count_inc(&p->diag.current_clips);
   }

@@ -1063,6 +1063,10 @@ START_TEST(test_intrin)
         ck_assert(canfdi_smull32_h16(canfdi_wrap_u32_to_s32(ue[i]), canfdi_wrap_u32_to_s32(ue[j])) == sp);
         ck_assert_uint_eq(canfdi_umulhi32(ue[i], ue[j]), (uint32_t)(p >> 32));
         ck_assert(canfdi_smull32(canfdi_wrap_u32_to_s32(ue[i]), canfdi_wrap_u32_to_s32(ue[j])) == sp);
+        ck_assert(canfdi_usmull32_h16(ue[i], canfdi_wrap_u32_to_s32(ue[j])) ==
+                  (int64_t)ue[i] * (int64_t)canfdi_wrap_u32_to_s32(ue[j]));
+        ck_assert(canfdi_usmull32(ue[i], canfdi_wrap_u32_to_s32(ue[j])) ==
+                  (int64_t)ue[i] * (int64_t)canfdi_wrap_u32_to_s32(ue[j]));
       }
     }
   }
@@ -1090,6 +1094,7 @@ START_TEST(test_mul_halves)
     ck_assert_uint_eq(canfdi_umulhi32_h16(a, b), (uint32_t)(((uint64_t)a * (uint64_t)b) >> 32));
     ck_assert(canfdi_smull32_h16(canfdi_wrap_u32_to_s32(a), canfdi_wrap_u32_to_s32(b)) ==
               (int64_t)canfdi_wrap_u32_to_s32(a) * (int64_t)canfdi_wrap_u32_to_s32(b));
+    ck_assert(canfdi_usmull32_h16(a, canfdi_wrap_u32_to_s32(b)) == (int64_t)a * (int64_t)canfdi_wrap_u32_to_s32(b));
   }
 }
 END_TEST
