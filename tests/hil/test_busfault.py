@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 import pytest
+import udsoncan
 
 from busrig import (BENCH, ECU_BUS, ID_ACT_DCM, ID_DIAG, ID_DTC, ID_STATUS, BusLog, Candump, Fiu, Rig,
                     SlcanAdapter, can_sock, gw, link_up, need_net_admin, pack, read_bus, sh)
@@ -56,11 +57,19 @@ def uds_args() -> argparse.Namespace:
     return uds.build_parser().parse_args(["-i", "socketcan", "-c", BENCH, "--timeout", "10", "dtc"])
 
 
-def dtc_memory() -> dict[int, int]:
-    """Every code of the ECU's memory with its status byte (0x19 0x02 0xFF)."""
-    with uds.connect(uds_args()) as t:
-        r = uds.check(t.c.get_dtc_by_status_mask(0xFF), "0x19 0x02")
-        return {d.id: d.status.get_byte_as_int() for d in r.service_data.dtcs}
+def dtc_memory(tries: int = 1) -> dict[int, int]:
+    """Every code of the ECU's memory with its status byte (0x19 0x02 0xFF).
+    tries > 1 asks again after a request that got no complete answer in
+    time (only where the test does not judge the server's timing)."""
+    for k in range(tries):
+        try:
+            with uds.connect(uds_args()) as t:
+                r = uds.check(t.c.get_dtc_by_status_mask(0xFF), "0x19 0x02")
+                return {d.id: d.status.get_byte_as_int() for d in r.service_data.dtcs}
+        except udsoncan.exceptions.TimeoutException:
+            if k + 1 == tries:
+                raise
+    raise AssertionError("unreachable")
 
 
 def ecu_reset(fiu: Fiu, procs: list, tries: int = 20) -> None:
@@ -232,7 +241,10 @@ def test_interface_down_for_6_s_in_real_time(stored_nvm: Path) -> None:
     try:
         time.sleep(1.0)
         assert len(alive_counters(20, 5.0)) > 1, "no EcuStatus before the outage"
-        before = dtc_memory()
+        # the reads may be asked again: in real time the host's scheduler
+        # can hold the tester past the ISO-TP timeouts of a multi-frame
+        # answer, and this test does not judge the server's timing
+        before = dtc_memory(tries=3)
         sh("ip", "link", "set", "down", ECU_BUS)
         t_down = time.monotonic()
         while time.monotonic() - t_down < 6.0:
@@ -242,7 +254,7 @@ def test_interface_down_for_6_s_in_real_time(stored_nvm: Path) -> None:
         while select.select([mon], [], [], 0)[0]:   # drop what queued before the outage
             mon.recv(16)
         assert len(alive_counters(20, 10.0)) > 1, "EcuStatus did not come back after the interface was up"
-        after = dtc_memory()
+        after = dtc_memory(tries=3)
         assert sim.stop() == 0, sim.tail()
         assert ecu.poll() is None, ecu.tail()
         assert ecu.stop() == 0, ecu.tail()
