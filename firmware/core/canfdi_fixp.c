@@ -57,6 +57,56 @@ const uint32_t canfdi_recip_seed[257] = {
     0x81018408U, 0x80C0A1B2U, 0x80800080U, 0x803FA010U, 0x7FFF8000U
 };
 
+/* The 32x32->64 products from 16-bit halves (canfdi_fixp.h). */
+
+/* Unsigned: "mid" <= 2^32 - 1. */
+uint64_t canfdi_umull32_h16(uint32_t a, uint32_t b)
+{
+  const uint32_t al = a & 0xFFFFU;
+  const uint32_t ah = a >> 16;
+  const uint32_t bl = b & 0xFFFFU;
+  const uint32_t bh = b >> 16;
+  const uint32_t ll = al * bl;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (ah * bl);
+  const uint32_t hi = (ah * bh) + (lh >> 16) + (mid >> 16);
+  return ((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU));
+}
+
+/* The unsigned product's high word only (the low word is not assembled). */
+uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
+{
+  const uint32_t al = a & 0xFFFFU;
+  const uint32_t ah = a >> 16;
+  const uint32_t bl = b & 0xFFFFU;
+  const uint32_t bh = b >> 16;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = ((al * bl) >> 16) + (lh & 0xFFFFU) + (ah * bl);
+  return (ah * bh) + (lh >> 16) + (mid >> 16);
+}
+
+/* Signed, from signed high halves (floor shifts, -2^15 .. 2^15 - 1) and
+ * unsigned low halves: ah bh < 2^30, each cross product below 2^31 in
+ * magnitude (their sum below 2^32, in 64 bits), al bl < 2^32; the sum of
+ * the scaled terms is the exact product. */
+int64_t canfdi_smull32_h16(int32_t a, int32_t b)
+{
+  const int32_t ah = canfdi_asr32(a, 16U);
+  const int32_t bh = canfdi_asr32(b, 16U);
+  const uint32_t al = (uint32_t)a & 0xFFFFU;
+  const uint32_t bl = (uint32_t)b & 0xFFFFU;
+  const int64_t cross = (int64_t)(ah * (int32_t)bl) + (int64_t)((int32_t)al * bh);
+  return (((int64_t)(ah * bh) * 4294967296LL) + (cross * 65536)) + (int64_t)(al * bl);
+}
+
+/* Unsigned times signed: the unsigned product of a and b's bit pattern,
+ * less a 2^32 when b < 0 (modulo 2^64); a b lies in [-2^63, 2^64 / 2). */
+int64_t canfdi_usmull32_h16(uint32_t a, int32_t b)
+{
+  const uint64_t p = canfdi_umull32_h16(a, (uint32_t)b);
+  return canfdi_wrap_u64_to_s64((b < 0) ? (p - ((uint64_t)a << 32)) : p);
+}
+
 /* |x| as an unsigned value; exact for INT32_MIN (2^31). */
 static uint32_t mag_u32(int32_t x)
 {
@@ -210,33 +260,6 @@ static uint64_t mag_u64(int64_t x)
   return (x < 0) ? (0U - (uint64_t)x) : (uint64_t)x;
 }
 
-/*
- * floor(num / den) for den >= 2^32 (so that the quotient is below 2^32):
- * the estimate from the divisor's top 32 bits (Hacker's Delight, 9-5,
- * "divDu"), q = floor(floor(num / 2) / v1) 2^n / 2^31 with v1 the top
- * word of den normalised to bit 63, is the quotient or one above it; one
- * less is the quotient or one below it, and one compare of the remainder
- * decides. Scaling and overflow: num / 2 < v1 2^32, so the 64/32 division
- * applies; (q - 1) den <= num fits 64 bits (two 32x32 products).
- */
-static uint32_t udiv_u64_u64_big(uint64_t num, uint64_t den)
-{
-  const unsigned n = canfdi_clz32((uint32_t)(den >> 32)); /* 0..31 */
-  const uint32_t v1 = (uint32_t)((den << n) >> 32);
-  uint32_t r;
-  const uint32_t q1 = udiv_u64_u32(num >> 1, v1, &r);
-  uint32_t q = q1 >> (31U - n); /* q1 2^n / 2^31, exact in 64 bits */
-  uint64_t rem;
-  if (q != 0U) {
-    q--;
-  }
-  rem = num - (canfdi_umull32(q, (uint32_t)den) + ((uint64_t)(q * (uint32_t)(den >> 32)) << 32));
-  if (rem >= den) {
-    q++;
-  }
-  return q;
-}
-
 int32_t canfdi_div_s64_sat_s32(int64_t num, int64_t den)
 {
   int32_t y;
@@ -249,12 +272,26 @@ int32_t canfdi_div_s64_sat_s32(int64_t num, int64_t den)
     /* |quotient| >= 2^31: INT32_MIN exactly or beyond either end */
     y = negative ? INT32_MIN : INT32_MAX;
   } else {
-    uint32_t q;
+    /* floor(m / d) < 2^31 by one 64/32 division: d itself when below 2^32
+     * (m < d 2^31); else d's top word normalised to bit 63 (Hacker's
+     * Delight, 9-5, "divDu"): v1 = floor(d 2^n / 2^32), and
+     * floor(floor(m / 2) / v1) 2^n / 2^31 is the quotient or one above it;
+     * one less is the quotient or one below it, and a compare of the
+     * remainder decides. Scaling and overflow: m / 2 < v1 2^32, so the
+     * 64/32 division applies; (q - 1) d <= m fits 64 bits. */
+    const bool big = (d >> 32) != 0U;
+    const unsigned n = big ? canfdi_clz32((uint32_t)(d >> 32)) : 0U; /* 0..31 */
+    const uint32_t v = big ? (uint32_t)((d << n) >> 32) : (uint32_t)d;
     uint32_t r;
-    if ((d >> 32) == 0U) {
-      q = udiv_u64_u32(m, (uint32_t)d, &r); /* m < d 2^31 */
-    } else {
-      q = udiv_u64_u64_big(m, d);
+    uint32_t q = udiv_u64_u32(big ? (m >> 1) : m, v, &r);
+    if (big) {
+      q >>= 31U - n; /* q1 2^n / 2^31, exact in 64 bits */
+      if (q != 0U) {
+        q--;
+      }
+      if ((m - (canfdi_umull32(q, (uint32_t)d) + ((uint64_t)(q * (uint32_t)(d >> 32)) << 32))) >= d) {
+        q++;
+      }
     }
     y = negative ? -(int32_t)q : (int32_t)q; /* q < 2^31 */
   }

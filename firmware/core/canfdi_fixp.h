@@ -218,61 +218,24 @@ static inline int64_t canfdi_asr64_rnd(int64_t x, unsigned n)
  * 32x32->64 products. ARMv7-M has UMULL/SMULL, which the plain C products
  * below compile to. ARMv6-M (Cortex-M0/M0+) has only a 32x32->32 MULS, and
  * a 64-bit product in C calls libgcc's __aeabi_lmul, which multiplies 64 by
- * 64 bits (~45 instructions with its call); the *_h16 forms build the
- * product from four 16x16->32 multiplies instead, inline, and are what
- * canfdi_umull32, canfdi_umulhi32, canfdi_smull32 and canfdi_usmull32 use
- * there. Both forms are exact, so every core gives the same bits
+ * 64 bits (~45 instructions with its call); the *_h16 forms (canfdi_fixp.c,
+ * one copy each: inline they would grow every caller) build the product
+ * from four 16x16->32 multiplies instead (20 to 35 instructions with the
+ * call), and are what canfdi_umull32, canfdi_umulhi32, canfdi_smull32 and
+ * canfdi_usmull32 use there. Both forms are exact, so every core gives the same bits
  * (tests/unit/test_fixp checks the halves against the host's products).
- * Scaling and overflow: exact, cannot overflow (stated per function).
+ * Scaling and overflow: exact, cannot overflow (stated with each
+ * definition in canfdi_fixp.c).
  */
 
-/* Unsigned: "mid" <= 2^32 - 1. */
-static inline uint64_t canfdi_umull32_h16(uint32_t a, uint32_t b)
-{
-  const uint32_t al = a & 0xFFFFU;
-  const uint32_t ah = a >> 16;
-  const uint32_t bl = b & 0xFFFFU;
-  const uint32_t bh = b >> 16;
-  const uint32_t ll = al * bl;
-  const uint32_t lh = al * bh;
-  const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (ah * bl);
-  const uint32_t hi = (ah * bh) + (lh >> 16) + (mid >> 16);
-  return ((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU));
-}
-
-/* The unsigned product's high word only (the low word is not assembled). */
-static inline uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
-{
-  const uint32_t al = a & 0xFFFFU;
-  const uint32_t ah = a >> 16;
-  const uint32_t bl = b & 0xFFFFU;
-  const uint32_t bh = b >> 16;
-  const uint32_t lh = al * bh;
-  const uint32_t mid = ((al * bl) >> 16) + (lh & 0xFFFFU) + (ah * bl);
-  return (ah * bh) + (lh >> 16) + (mid >> 16);
-}
-
-/* Signed, from signed high halves (floor shifts, -2^15 .. 2^15 - 1) and
- * unsigned low halves: ah bh < 2^30, each cross product below 2^31 in
- * magnitude (their sum below 2^32, in 64 bits), al bl < 2^32; the sum of
- * the scaled terms is the exact product. */
-static inline int64_t canfdi_smull32_h16(int32_t a, int32_t b)
-{
-  const int32_t ah = canfdi_asr32(a, 16U);
-  const int32_t bh = canfdi_asr32(b, 16U);
-  const uint32_t al = (uint32_t)a & 0xFFFFU;
-  const uint32_t bl = (uint32_t)b & 0xFFFFU;
-  const int64_t cross = (int64_t)(ah * (int32_t)bl) + (int64_t)((int32_t)al * bh);
-  return (((int64_t)(ah * bh) * 4294967296LL) + (cross * 65536)) + (int64_t)(al * bl);
-}
-
-/* Unsigned times signed: the unsigned product of a and b's bit pattern,
- * less a 2^32 when b < 0 (modulo 2^64); a b lies in [-2^63, 2^64 / 2). */
-static inline int64_t canfdi_usmull32_h16(uint32_t a, int32_t b)
-{
-  const uint64_t p = canfdi_umull32_h16(a, (uint32_t)b);
-  return canfdi_wrap_u64_to_s64((b < 0) ? (p - ((uint64_t)a << 32)) : p);
-}
+/* Unsigned: exact. */
+uint64_t canfdi_umull32_h16(uint32_t a, uint32_t b);
+/* The unsigned product's high word only. */
+uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b);
+/* Signed. */
+int64_t canfdi_smull32_h16(int32_t a, int32_t b);
+/* Unsigned a times signed b. */
+int64_t canfdi_usmull32_h16(uint32_t a, int32_t b);
 
 /* a b for unsigned 32-bit operands: UMULL (ARMv6-M: the halves). */
 static inline uint64_t canfdi_umull32(uint32_t a, uint32_t b)
