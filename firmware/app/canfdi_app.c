@@ -299,6 +299,19 @@ static void stage_gates(canfdi_app_t *app)
   }
 }
 
+/* The throttle estimator's updates on their slots of the rate schedule
+ * (canfdi_app.h, CANFDI_APP_SLOT_EST_THR): step k = slot + decim - offset
+ * of the estimator's schedule has k mod decim = 0 exactly on the slots
+ * with slot mod decim = offset. Only when decim divides the schedule's
+ * period (else the intervals between its updates would vary). */
+static void est_thr_align(canfdi_app_t *app)
+{
+  const uint32_t d = app->est_thr.cfg.decim;
+  if ((app->cal.diag_period_steps % d) == 0U) {
+    canfdi_est_thr_align(&app->est_thr, ((uint32_t)app->slot + d) - (CANFDI_APP_SLOT_EST_THR % d));
+  }
+}
+
 /* Stage 4b: residuals, estimates and the actuator monitors on this step's
  * samples and the commands applied over the interval that ends with them. */
 static void stage_detect(canfdi_app_t *app)
@@ -329,6 +342,7 @@ static void stage_detect(canfdi_app_t *app)
     (void)canfdi_parity_thr_step(&app->parity_thr, &pt);
   }
   if (app->thr.est_on) {
+    est_thr_align(app);
     canfdi_est_thr_step(&app->est_thr, pt.u_V_q16, pt.i_A_q16, app->vote_out.angle_rad_q16);
   }
   ai.thr_angle_rad_q16 = app->vote_out.angle_rad_q16;

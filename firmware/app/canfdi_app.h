@@ -144,9 +144,10 @@
  * Rate schedule (docs/architecture.md, "Rate schedule"): a 10 ms frame of
  * CANFDI_APP_FRAME_SLOTS 1 ms slots (app->slot). Every step: input
  * supervision, vote, control, gates, parity residuals and the estimators'
- * SVFs (their RLS updates decimated inside the modules: est_dcm electrical
- * at phase 0, mechanical at 1 of 5; est_thr electrical / mechanical on
- * alternate steps), actuator monitors, symptom vector (its filters are
+ * SVFs (their RLS updates decimated: est_dcm armature and mechanical on
+ * two consecutive steps of every 5, counted from its start; est_thr
+ * electrical on the even slots, mechanical and fast test on the odd ones,
+ * CANFDI_APP_SLOT_EST_THR), actuator monitors, symptom vector (its filters are
  * 1 ms filters), the diagnosis' flags, symptom persistence and hard rules
  * (canfdi_diagnosis_step_hard), DTC routing (it takes one-step events: a
  * rejected frame, a timeout, the manager's findings), actuator manager,
@@ -199,6 +200,15 @@
  * every cal.diag_period_steps (see the header, rate schedule). */
 #define CANFDI_APP_FRAME_SLOTS 10U
 #define CANFDI_APP_SLOT_DIAG 0U
+/* The throttle estimator's RLS updates on fixed slots
+ * (canfdi_est_thr_align): its electrical update on the slots with
+ * slot mod decim = CANFDI_APP_SLOT_EST_THR (the even ones at its decim of
+ * 2), its mechanical update and fast test (the costlier) on the odd ones,
+ * never with the model rules' matching in slot CANFDI_APP_SLOT_DIAG. It
+ * counts from its own start instead when its decim does not divide
+ * cal.diag_period_steps (the intervals would vary). The DC motor's
+ * estimator counts from its own start. */
+#define CANFDI_APP_SLOT_EST_THR 0U
 
 /* The NVM image: a 4-byte header (CANFDI_APP_IMAGE_TAG, version, the
  * security attempt counter, 0) before the DTC memory's image. */

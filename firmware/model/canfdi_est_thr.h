@@ -272,6 +272,14 @@ void canfdi_est_thr_boost(canfdi_est_thr_t *e);
 #define CANFDI_EST_THR_UPD_MECH 0x02U
 uint8_t canfdi_est_thr_updated(const canfdi_est_thr_t *e);
 
+/* The next step is step k of the caller's schedule: the electrical update
+ * falls on the steps with k mod decim = 0, the mechanical update and the
+ * fast test on those with k mod decim = 1 (the same steps when decim is 1).
+ * Called before every step, it locks the updates to the schedule; never
+ * called, they count from the estimator's (re)start. Cannot fail. Cost: one
+ * 32-bit division. */
+void canfdi_est_thr_align(canfdi_est_thr_t *e, uint32_t k);
+
 /* One 1 ms step: motor voltage (V), current (A), angle (rad), Q16.16. */
 void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16);
 

@@ -436,6 +436,46 @@ START_TEST(test_has_run_and_counters_saturate)
 }
 END_TEST
 
+/* canfdi_est_thr_align: on excited data, with k advanced by one per step
+ * from an arbitrary start (loop index: decim 2, the default, or 5), an
+ * electrical update happens only on steps with k mod decim = 0 and a
+ * mechanical one only with k mod decim = 1, and both happen; the alignment
+ * holds across a reset (the counter restarts, the caller's k does not). */
+START_TEST(test_align)
+{
+  canfdi_est_thr_cfg_t c;
+  const uint32_t decim = (_i == 0) ? 2U : 5U;
+  uint32_t k = 7U + (uint32_t)_i;
+  unsigned n_el = 0U;
+  unsigned n_mech = 0U;
+  long j;
+  rig_init(3U, 1e4, 0.0);
+  canfdi_est_thr_default_cfg(&c);
+  c.decim = (uint8_t)decim;
+  ck_assert_int_eq(canfdi_est_thr_init(&rig.est, &c), CANFDI_OK);
+  for (j = 0; j < 6000; j++) {
+    uint8_t upd;
+    if (j == 3001) {
+      canfdi_est_thr_reset(&rig.est, true);
+    }
+    canfdi_est_thr_align(&rig.est, k);
+    rig_step();
+    upd = canfdi_est_thr_updated(&rig.est);
+    if ((upd & CANFDI_EST_THR_UPD_EL) != 0U) {
+      ck_assert_msg((k % decim) == 0U, "electrical update at k = %u (decim %u)", k, decim);
+      n_el++;
+    }
+    if ((upd & CANFDI_EST_THR_UPD_MECH) != 0U) {
+      ck_assert_msg((k % decim) == 1U, "mechanical update at k = %u (decim %u)", k, decim);
+      n_mech++;
+    }
+    k++;
+  }
+  ck_assert_uint_gt(n_el, 6000U / decim / 2U);
+  ck_assert_uint_gt(n_mech, 6000U / decim / 4U);
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("est_thr");
@@ -456,6 +496,7 @@ static Suite *make_suite(void)
   tcase_set_timeout(tc, 120);
   tcase_add_loop_test(tc, test_fast, 0, (int)(sizeof fast_cases / sizeof fast_cases[0]));
   tcase_add_test(tc, test_fast_pairing);
+  tcase_add_loop_test(tc, test_align, 0, 2);
   suite_add_tcase(s, tc);
   return s;
 }
