@@ -49,12 +49,10 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
     const int32_t st = canfdi_dtc_status(dtc, (uint8_t)j);
     const uint8_t s = (st >= 0) ? (uint8_t)st : 0U;
     if (s != o->dtc_status_sent[j]) {
-      canfdi_dtc_record_t rec;
       canfdi_tx_dtc_t ev;
-      (void)canfdi_dtc_read_record(dtc, dtc->table[j].dtc, &rec);
       ev.dtc = dtc->table[j].dtc;
       ev.status = s;
-      ev.occurrence = rec.occurrence;
+      ev.occurrence = canfdi_dtc_occurrence(dtc, (uint8_t)j);
       ev.index = (uint8_t)j;
       ev.count = count;
       if (canfdi_tx_dtc_event(tx, &ev) == CANFDI_OK) {
@@ -80,11 +78,9 @@ static void cyclic_dtc(canfdi_app_out_t *o, const canfdi_dtc_t *dtc, canfdi_tx_d
     const int32_t st = canfdi_dtc_status(dtc, (uint8_t)j);
     if ((st >= 0) && (((uint32_t)st & CANFDI_DTC_ST_TFSLC) != 0U)) {
       if (n == want) {
-        canfdi_dtc_record_t r;
-        (void)canfdi_dtc_read_record(dtc, dtc->table[j].dtc, &r);
         rec->dtc = dtc->table[j].dtc;
         rec->status = (uint8_t)st;
-        rec->occurrence = r.occurrence;
+        rec->occurrence = canfdi_dtc_occurrence(dtc, (uint8_t)j);
         rec->index = (uint8_t)n;
       }
       n++;

@@ -510,6 +510,15 @@ int32_t canfdi_dtc_status(const canfdi_dtc_t *m, uint8_t index)
   return out;
 }
 
+uint8_t canfdi_dtc_occurrence(const canfdi_dtc_t *m, uint8_t index)
+{
+  uint8_t out = 0U;
+  if (bound(m) && (index < m->n_dtcs) && (m->dtc[index].entry != CANFDI_DTC_NONE)) {
+    out = m->entry[m->dtc[index].entry].occurrence;
+  }
+  return out;
+}
+
 int8_t canfdi_dtc_fdc(const canfdi_dtc_t *m, uint8_t index)
 {
   int8_t out = 0;

@@ -376,6 +376,11 @@ int32_t canfdi_dtc_find(const canfdi_dtc_t *m, uint32_t dtc);
 /* Status byte of the DTC at `index` (0..255), or -CANFDI_EINVAL. O(1). */
 int32_t canfdi_dtc_status(const canfdi_dtc_t *m, uint8_t index);
 
+/* Occurrence counter of the DTC at `index` (its event-memory entry's; 0
+ * without an entry, for a bad index or NULL): canfdi_dtc_read_record's
+ * `occurrence` without the search by DTC number. O(1). */
+uint8_t canfdi_dtc_occurrence(const canfdi_dtc_t *m, uint8_t index);
+
 /* Fault detection counter (-128..127) of the DTC's debouncer
  * (ReadDTCInformation 0x14); 0 for a bad index or NULL. O(1). */
 int8_t canfdi_dtc_fdc(const canfdi_dtc_t *m, uint8_t index);

@@ -432,6 +432,9 @@ START_TEST(test_freeze_frame_first_failure)
   ck_assert_int_eq(canfdi_dtc_read_record(&mem, 0x123400U, &r), -CANFDI_ENODATA);
   ck_assert_uint_eq(r.status, 0x50U);
   ck_assert_uint_eq(r.occurrence, 0U);
+  ck_assert_uint_eq(canfdi_dtc_occurrence(&mem, 0U), 0U);
+  ck_assert_uint_eq(canfdi_dtc_occurrence(&mem, 2U), 0U);   /* bad index */
+  ck_assert_uint_eq(canfdi_dtc_occurrence(NULL, 0U), 0U);
   ck_assert(!r.ff_valid);
   /* a pass does not store anything */
   report(&mem, 0U, CANFDI_DEB_REPORT_PASSED, &ff1);
@@ -449,6 +452,8 @@ START_TEST(test_freeze_frame_first_failure)
   ck_assert(r.ff_valid);
   ck_assert(ff_equal(&r.ff, &ff1));
   ck_assert_uint_eq(r.occurrence, 3U);
+  ck_assert_uint_eq(canfdi_dtc_occurrence(&mem, 0U), 3U);
+  ck_assert_uint_eq(canfdi_dtc_occurrence(&mem, 1U), 0U);
   /* a clear frees the entry; the next failure stores the new snapshot */
   ck_assert_int_eq(canfdi_dtc_clear(&mem, 0x123400U), CANFDI_OK);
   ck_assert_int_eq(canfdi_dtc_read_record(&mem, 0x123400U, &r), -CANFDI_ENODATA);
@@ -456,6 +461,7 @@ START_TEST(test_freeze_frame_first_failure)
   ck_assert_int_eq(canfdi_dtc_read_record(&mem, 0x123400U, &r), CANFDI_OK);
   ck_assert(ff_equal(&r.ff, &ff2));
   ck_assert_uint_eq(r.occurrence, 1U);
+  ck_assert_uint_eq(canfdi_dtc_occurrence(&mem, 0U), 1U);
   /* aging (K=2) frees it as well */
   report(&mem, 0U, CANFDI_DEB_REPORT_PASSED, NULL);
   for (int c = 0; c < 3; c++) {
