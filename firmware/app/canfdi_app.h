@@ -113,31 +113,28 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      22 200   24 400   30 300
- *   Cortex-M4 (an386)      22 200   24 300   30 300
- *   Cortex-M0 (microbit)   46 000   53 100   67 500
- * and at most 33 900 (M4) / 76 400 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      21 110   23 132   29 801
+ *   Cortex-M4 (an386)      21 088   23 101   29 758
+ *   Cortex-M0 (microbit)   41 512   47 931   60 900
+ * and at most 30 695 (M4) / 63 953 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
- * with symptoms present, two RLS updates, the trouble code stored). Where
- * the instructions go, per module, per slot of the rate schedule and in
- * the costliest steps: `make bench-pil-profile` (tests/pil/pil_profile.py).
- * On the M4 in dcm_ia_offset (mean 24 600): the state-variable filters
- * 4 600 (fifteen, every step), the diagnosis 3 100 (symptom persistence
- * and hard rules every step, the matching every 10 ms), parity_dcm 2 500,
- * DTC routing and memory 2 700, the RLS updates 1 400, input supervision
- * 1 000, the rest below 1 000 a module. A 1 ms step needs a Cortex-M4 of
+ * with symptoms present, the trouble codes stored and sent, an RLS
+ * update). Where the instructions go, per module, per slot of the rate
+ * schedule and in the costliest steps: `make bench-pil-profile`
+ * (tests/pil/pil_profile.py; its split is summarised in
+ * docs/requirements.md, requirement 1). A 1 ms step needs a Cortex-M4 of
  * roughly 40 MHz or more with margin (the worst step at ~1.2 cycles per
- * instruction: 41 MHz for the whole millisecond); on a Cortex-M0 at
- * 48 MHz it does not fit (the M0 needs its 32x32->64 products from 16-bit
- * halves, core/canfdi_intrin.h, and runs ~2.2 times the M4's count).
+ * instruction: 37 MHz for the whole millisecond); on a Cortex-M0 at
+ * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
+ * halves, core/canfdi_fixp.h, and runs ~2.1 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 27 800 (M4) / 59 900
- * (M0) in those steps, within the same run's maxima (32 300 / 62 800).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 27 400 (M4) / 55 800
+ * (M0) in those steps, within the same run's maxima (29 400 / 59 800).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 33 061 / 71 522,
- * with ~10 % margin). `make pil-cost` checks it on hostile input: the
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 30 695 / 63 953,
+ * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
  * than the models running on valid data.
@@ -146,12 +143,12 @@
  * supervision, vote, control, gates, parity residuals and the estimators'
  * SVFs (their RLS updates decimated: est_dcm armature and mechanical on
  * two consecutive steps of every 5, counted from its start; est_thr
- * electrical on the even slots, mechanical and fast test on the odd ones,
- * CANFDI_APP_SLOT_EST_THR), actuator monitors, symptom vector (its filters are
- * 1 ms filters), the diagnosis' flags, symptom persistence and hard rules
- * (canfdi_diagnosis_step_hard), DTC routing (it takes one-step events: a
- * rejected frame, a timeout, the manager's findings), actuator manager,
- * outputs, server. In slot CANFDI_APP_SLOT_DIAG of every
+ * electrical on the even slots, mechanical and fast test on the odd
+ * ones, CANFDI_APP_SLOT_EST_THR), actuator monitors, symptom vector (its
+ * filters are 1 ms filters), the diagnosis' flags, symptom persistence
+ * and hard rules (canfdi_diagnosis_step_hard), DTC routing (it takes
+ * one-step events: a rejected frame, a timeout, the manager's findings),
+ * actuator manager, outputs, server. In slot CANFDI_APP_SLOT_DIAG of every
  * cal.diag_period_steps (default 10): the model rules' matching
  * (canfdi_diagnosis_step), its isolation count converted from 1 ms steps
  * at init (rounded up); between its runs its verdicts hold. A model-based
