@@ -95,8 +95,12 @@ int64_t canfdi_smull32_h16(int32_t a, int32_t b)
   const int32_t bh = canfdi_asr32(b, 16U);
   const uint32_t al = (uint32_t)a & 0xFFFFU;
   const uint32_t bl = (uint32_t)b & 0xFFFFU;
-  const int64_t cross = (int64_t)(ah * (int32_t)bl) + (int64_t)((int32_t)al * bh);
-  return (((int64_t)(ah * bh) * 4294967296LL) + (cross * 65536)) + (int64_t)(al * bl);
+  const int32_t hh = ah * bh;
+  const int32_t hl = ah * (int32_t)bl;
+  const int32_t lh = (int32_t)al * bh;
+  const uint32_t ll = al * bl;
+  const int64_t cross = (int64_t)hl + (int64_t)lh;
+  return (((int64_t)hh * 4294967296LL) + (cross * 65536)) + (int64_t)ll;
 }
 
 /* Unsigned times signed: the unsigned product of a and b's bit pattern,
@@ -289,8 +293,11 @@ int32_t canfdi_div_s64_sat_s32(int64_t num, int64_t den)
       if (q != 0U) {
         q--;
       }
-      if ((m - (canfdi_umull32(q, (uint32_t)d) + ((uint64_t)(q * (uint32_t)(d >> 32)) << 32))) >= d) {
-        q++;
+      {
+        const uint32_t qdh = q * (uint32_t)(d >> 32); /* < 2^32: q d <= m */
+        if ((m - (canfdi_umull32(q, (uint32_t)d) + ((uint64_t)qdh << 32))) >= d) {
+          q++;
+        }
       }
     }
     y = negative ? -(int32_t)q : (int32_t)q; /* q < 2^31 */
