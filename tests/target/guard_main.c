@@ -98,10 +98,12 @@ static void guard_fixp(void)
   sinku64(canfdi_umull32(in_u32, (uint32_t)b));
   sink32((int32_t)canfdi_umulhi32(in_u32, (uint32_t)b));
   sink64(canfdi_smull32(a, b));
+  sink64(canfdi_usmull32(in_u32, b));
   sink32((int32_t)canfdi_recip_q63(in_u32 | 0x80000000U));
   sinku64(canfdi_umull32_h16(in_u32, (uint32_t)b));
   sink32((int32_t)canfdi_umulhi32_h16(in_u32, (uint32_t)b));
   sink64(canfdi_smull32_h16(a, b));
+  sink64(canfdi_usmull32_h16(in_u32, b));
   sink32(canfdi_clamp_s32(a, b, c));
   sink32(canfdi_asr32(a, n));
   sink64(canfdi_asr64(a64, n));
@@ -135,6 +137,7 @@ static void guard_fixp(void)
   sink32(canfdi_q15_div(a15, b15));
   sink32(canfdi_q31_div(a, b));
   sink32(canfdi_div_s32_qn(a, b, n));
+  sink32(canfdi_div_s64_sat_s32(a64, b64));
   sinku64(canfdi_isqrt_u32(in_u32));
   sinku64(canfdi_isqrt_u64(in_u64));
   sink32(canfdi_q15_sqrt(a15));
@@ -404,6 +407,7 @@ static void guard_est_thr(void)
   canfdi_est_thr_default_cfg(&cfg);
   sink32(canfdi_est_thr_init(&est, &cfg));
   canfdi_est_thr_reset(&est, in_n != 0U);
+  canfdi_est_thr_align(&est, in_u32);
   canfdi_est_thr_step(&est, in_s32[0], in_s32[1], in_s32[2]);
   sink32(canfdi_est_thr_r_q16(&est));
   sink32(canfdi_est_thr_l_q24(&est));
@@ -695,6 +699,7 @@ static void guard_dtc(void)
   sink32(canfdi_dtc_find(&dtc, in_u32));
   sink32(canfdi_dtc_status(&dtc, idx));
   sink32(canfdi_dtc_fdc(&dtc, idx));
+  sink32((int32_t)canfdi_dtc_occurrence(&dtc, idx));
   sink32((int32_t)canfdi_dtc_count_by_mask(&dtc, (uint8_t)in_u32));
   sink32(canfdi_dtc_next_by_mask(&dtc, (uint8_t)in_u32, &cursor, &code, &status));
   sinku64((uint64_t)code + status + cursor);
