@@ -85,22 +85,24 @@ uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
   return (ah * bh) + (lh >> 16) + (mid >> 16);
 }
 
-/* Signed, from signed high halves (floor shifts, -2^15 .. 2^15 - 1) and
- * unsigned low halves: ah bh < 2^30, each cross product below 2^31 in
- * magnitude (their sum below 2^32, in 64 bits), al bl < 2^32; the sum of
- * the scaled terms is the exact product. */
+/* Signed: the unsigned product of the two bit patterns, whose high word
+ * less b when a < 0 and less a when b < 0 (modulo 2^32) is the signed
+ * product's high word (a = a_u - 2^32 [a < 0]); the low words agree. All in
+ * 32-bit words: no 64-bit addition, which ARMv6-M builds from carries. */
 int64_t canfdi_smull32_h16(int32_t a, int32_t b)
 {
-  const int32_t ah = canfdi_asr32(a, 16U);
-  const int32_t bh = canfdi_asr32(b, 16U);
-  const uint32_t al = (uint32_t)a & 0xFFFFU;
-  const uint32_t bl = (uint32_t)b & 0xFFFFU;
-  const int32_t hh = ah * bh;
-  const int32_t hl = ah * (int32_t)bl;
-  const int32_t lh = (int32_t)al * bh;
+  const uint32_t ua = (uint32_t)a;
+  const uint32_t ub = (uint32_t)b;
+  const uint32_t al = ua & 0xFFFFU;
+  const uint32_t ah = ua >> 16;
+  const uint32_t bl = ub & 0xFFFFU;
+  const uint32_t bh = ub >> 16;
   const uint32_t ll = al * bl;
-  const int64_t cross = (int64_t)hl + (int64_t)lh;
-  return (((int64_t)hh * 4294967296LL) + (cross * 65536)) + (int64_t)ll;
+  const uint32_t lh = al * bh;
+  const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (ah * bl);
+  const uint32_t corr = (ub & (0U - (ua >> 31))) + (ua & (0U - (ub >> 31)));
+  const uint32_t hi = ((ah * bh) + (lh >> 16) + (mid >> 16)) - corr;
+  return canfdi_wrap_u64_to_s64(((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU)));
 }
 
 /* Unsigned times signed: the unsigned product of a and b's bit pattern,

@@ -220,7 +220,7 @@ static inline int64_t canfdi_asr64_rnd(int64_t x, unsigned n)
  * a 64-bit product in C calls libgcc's __aeabi_lmul, which multiplies 64 by
  * 64 bits (~45 instructions with its call); the *_h16 forms (canfdi_fixp.c,
  * one copy each: inline they would grow every caller) build the product
- * from four 16x16->32 multiplies instead (20 to 35 instructions with the
+ * from four 16x16->32 multiplies instead (20 to 40 instructions with the
  * call), and are what canfdi_umull32, canfdi_umulhi32, canfdi_smull32 and
  * canfdi_usmull32 use there. Both forms are exact, so every core gives the same bits
  * (tests/unit/test_fixp checks the halves against the host's products).
