@@ -234,7 +234,10 @@ void canfdi_svf_step(canfdi_svf_t *f, int32_t x_q16)
      * two rows of (I - hM) dv = h w) */
     const int64_t w0 = 2 * v1;
     const int64_t w1 = 2 * v2;
-    const int64_t w2 = us - (2 * v0) - (6 * (v1 + v2));
+    const int64_t s12 = v1 + v2;
+    /* - 6 (v2 + v3) as - 2 (v1 + v2 + v3) - 4 (v2 + v3), the same sum: at
+     * -Os GCC turns a 64-bit product by 6 into a libgcc call on ARMv6-M */
+    const int64_t w2 = (us - (2 * (v0 + s12))) - (4 * s12);
     const int64_t dv2 =
         (svf_mul_q31(w0, f->g_q31[0]) + svf_mul_q31(w1, f->g_q31[1])) + svf_mul_q31(w2, f->g_q31[2]);
     const int64_t dv1 = svf_mul_q31(w1 + dv2, f->h_q31);
