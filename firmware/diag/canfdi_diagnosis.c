@@ -15,15 +15,18 @@
  * (diag/gen/canfdi_diag_rules.c). */
 CANFDI_STATIC_ASSERT(CANFDI_FAULT_COUNT <= 32U, fault_ids_fit_the_mask);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_FLAGS <= 16U, flags_fit_uint16);
+CANFDI_STATIC_ASSERT((CANFDI_DIAG_REPORT_FAILED == 1) && (CANFDI_DIAG_REPORT_PASSED == -1) &&
+                         (CANFDI_DIAG_REPORT_NONE == 0),
+                     report_phase_computes_the_codes);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_COMP_THR < CANFDI_DIAG_N_COMP, components_fit);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_RULES <= 32U, rules_fit_the_gate_mask);
 
 /* Most steps a low flux-loss prediction adds to a residual's hold (the
  * parity's load tracking time, 1 s). */
-
-/* Test verdicts while combining a hard and a model rule of one fault. */
 #define FX_LOW_MAX 1000U
-#define V_NA 0U   /* no such test */
+
+/* Test verdicts while combining a hard and a model rule of one fault (no
+ * such test: the fault's bit is not in the mask's has). */
 #define V_NONE 1U /* not tested */
 #define V_PASS 2U
 #define V_FAIL 3U
@@ -152,9 +155,7 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
       d->fresh[c][0] = 0U;
       d->fresh[c][1] = 0U;
     }
-    for (j = 0U; j < CANFDI_FAULT_COUNT; j++) {
-      d->mv_last[j] = V_NA;
-    }
+    d->mv_last = (canfdi_diagnosis_vmask_t){0U, 0U, 0U};
     for (j = 0U; j < CANFDI_DIAG_N_FLAGS; j++) {
       pers_clear(&d->flag[j], CANFDI_DIAG_SYM_ZERO);
     }
@@ -704,12 +705,28 @@ static void fill_none(int8_t report[])
   }
 }
 
-/* Per-fault verdicts of one step (V_*), hard and model rules apart. */
+/* Per-fault verdicts of one step, hard and model rules apart. */
 typedef struct {
-  uint8_t hv[CANFDI_FAULT_COUNT]; /* hard-rule verdict per fault */
-  uint8_t mv[CANFDI_FAULT_COUNT]; /* model-rule verdict per fault */
+  canfdi_diagnosis_vmask_t h; /* hard-rule verdicts */
+  canfdi_diagnosis_vmask_t m; /* model-rule verdicts */
   bool hard_any[CANFDI_DIAG_N_COMP];
 } verdicts_t;
+
+/* Fault f's verdict becomes vd (V_NONE, V_PASS or V_FAIL; a later verdict
+ * replaces an earlier one). */
+static void vset(canfdi_diagnosis_vmask_t *m, uint8_t f, uint8_t vd)
+{
+  const uint32_t b = (uint32_t)1U << f;
+  CANFDI_ASSERT((f < CANFDI_FAULT_COUNT) && (vd >= V_NONE) && (vd <= V_FAIL));
+  m->has |= b;
+  m->pass = (vd == V_PASS) ? (m->pass | b) : (m->pass & ~b);
+  m->fail = (vd == V_FAIL) ? (m->fail | b) : (m->fail & ~b);
+}
+
+static bool vfailed(const canfdi_diagnosis_vmask_t *m, uint8_t f)
+{
+  return ((m->fail >> f) & 1U) != 0U;
+}
 
 /* Phase 1: the hard rules on this step's persistent flags. */
 static void hard_phase(const canfdi_symptoms_t *s, uint32_t flags, verdicts_t *v)
@@ -718,12 +735,12 @@ static void hard_phase(const canfdi_symptoms_t *s, uint32_t flags, verdicts_t *v
   for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
     const canfdi_diag_hard_rule_t *h = &canfdi_diag_hard_rules[i];
     if ((s->flags & h->untested) != 0U) {
-      v->hv[h->fault] = V_NONE;
+      vset(&v->h, h->fault, V_NONE);
     } else if (hard_fires(h, flags)) {
-      v->hv[h->fault] = V_FAIL;
+      vset(&v->h, h->fault, V_FAIL);
       v->hard_any[h->comp] = true;
     } else {
-      v->hv[h->fault] = V_PASS;
+      vset(&v->h, h->fault, V_PASS);
     }
   }
 }
@@ -735,7 +752,8 @@ static void model_verdicts(uint32_t c, uint8_t mv, uint8_t isolated, verdicts_t 
   uint32_t i;
   for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
     if (canfdi_diag_model_rules[i].comp == c) {
-      v->mv[canfdi_diag_model_rules[i].fault] = ((isolated != 0U) && (canfdi_diag_model_rules[i].fault == isolated)) ? V_FAIL : mv;
+      vset(&v->m, canfdi_diag_model_rules[i].fault,
+           ((isolated != 0U) && (canfdi_diag_model_rules[i].fault == isolated)) ? V_FAIL : mv);
     }
   }
 }
@@ -762,7 +780,7 @@ static void component_hard(canfdi_diagnosis_t *d, uint32_t c, bool prev_hard, ve
   uint8_t hard_id = 0U;
   uint32_t i;
   for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
-    if ((canfdi_diag_hard_rules[i].comp == c) && (v->hv[canfdi_diag_hard_rules[i].fault] == V_FAIL) && (hard_id == 0U)) {
+    if ((canfdi_diag_hard_rules[i].comp == c) && vfailed(&v->h, canfdi_diag_hard_rules[i].fault) && (hard_id == 0U)) {
       hard_id = canfdi_diag_hard_rules[i].fault;
     }
   }
@@ -784,7 +802,7 @@ static void component_quiet(canfdi_diagnosis_t *d, uint32_t c, verdicts_t *v)
   clear_result(d, c, 0U, 0U);
   for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
     if (canfdi_diag_model_rules[i].comp == c) {
-      v->mv[canfdi_diag_model_rules[i].fault] = (!held && rule_testable(d, i)) ? V_PASS : V_NONE;
+      vset(&v->m, canfdi_diag_model_rules[i].fault, (!held && rule_testable(d, i)) ? V_PASS : V_NONE);
     }
   }
 }
@@ -845,7 +863,7 @@ static void component_phase(canfdi_diagnosis_t *d, verdicts_t *v)
   for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
     canfdi_diagnosis_result_t *res = &d->res[c];
     const uint8_t prev_isolated = res->isolated;
-    const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (v->hv[prev_isolated] == V_FAIL);
+    const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && vfailed(&v->h, prev_isolated);
     observe(d, c);
     res->detected = v->hard_any[c] || ((d->obs_pos | d->obs_neg) != 0U);
     if (v->hard_any[c]) {
@@ -868,26 +886,18 @@ static void corr_phase(canfdi_diagnosis_t *d, const verdicts_t *v)
 }
 
 /* Phase 3: one report per fault; FAILED if either test failed, PASSED only
- * if every test it has ran and passed. */
+ * if every test it has ran and passed (a passed or absent test on each
+ * side, and one test at least). */
 static void report_phase(canfdi_diagnosis_t *d, const verdicts_t *v, int8_t report[])
 {
+  const uint32_t failed = v->h.fail | v->m.fail;
+  const uint32_t passed = ((~failed & (~v->h.has | v->h.pass)) & (~v->m.has | v->m.pass)) & (v->h.has | v->m.has);
   uint32_t i;
-  d->failed_mask = 0U;
-  for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-    const uint8_t hv = v->hv[i];
-    const uint8_t mv = v->mv[i];
-    int8_t r = CANFDI_DIAG_REPORT_NONE;
-    if ((hv == V_FAIL) || (mv == V_FAIL)) {
-      r = CANFDI_DIAG_REPORT_FAILED;
-      d->failed_mask |= ((uint32_t)1U << i);
-    } else if (((hv == V_PASS) || (hv == V_NA)) && ((mv == V_PASS) || (mv == V_NA)) &&
-               ((hv != V_NA) || (mv != V_NA))) {
-      r = CANFDI_DIAG_REPORT_PASSED;
-    } else {
-      /* not tested in this step */
-    }
-    if (report != NULL) {
-      report[i] = r;
+  d->failed_mask = failed;
+  if (report != NULL) {
+    /* FAILED 1, PASSED -1, NONE 0; the two masks are disjoint */
+    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
+      report[i] = (int8_t)((int32_t)((failed >> i) & 1U) - (int32_t)((passed >> i) & 1U));
     }
   }
 }
@@ -902,7 +912,7 @@ static void hard_components(canfdi_diagnosis_t *d, verdicts_t *v)
     canfdi_diagnosis_result_t *res = &d->res[c];
     const uint8_t prev_isolated = res->isolated;
     if (v->hard_any[c]) {
-      const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && (v->hv[prev_isolated] == V_FAIL);
+      const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && vfailed(&v->h, prev_isolated);
       res->detected = true;
       component_hard(d, c, prev_hard, v);
     }
@@ -926,10 +936,8 @@ static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     canfdi_count_inc(&d->diag.steps);
     update_flags(d, s);
     update_channels(d, s);
-    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-      v.hv[i] = V_NA;
-      v.mv[i] = model ? V_NA : d->mv_last[i];
-    }
+    v.h = (canfdi_diagnosis_vmask_t){0U, 0U, 0U};
+    v.m = model ? v.h : d->mv_last;
     for (i = 0U; i < CANFDI_DIAG_N_COMP; i++) {
       v.hard_any[i] = false;
     }
@@ -939,9 +947,7 @@ static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     } else {
       hard_components(d, &v);
     }
-    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-      d->mv_last[i] = v.mv[i];
-    }
+    d->mv_last = v.m;
     corr_phase(d, &v);
     report_phase(d, &v, report);
   }

@@ -218,7 +218,7 @@
  * counts, not cycles). Code (`make footprint`, the application image,
  * ROM tables included): 5.2 kB (M4), 5.5 kB (M0). Stack (-fstack-usage, M0): canfdi_diagnosis_step
  * 192 bytes, calling update_channels (80) which calls channel (40).
- * Memory: sizeof(canfdi_diagnosis_t) = 808 bytes on a 32-bit target (the
+ * Memory: sizeof(canfdi_diagnosis_t) = 788 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag
  * persistence, the normalised values, the compiled rules, the weights, the
  * results, the flux gate's counters, the diagnostics and the state). No heap, no globals besides const tables, no
@@ -334,6 +334,16 @@ typedef struct {
   uint16_t quiet; /* consecutive steps below off, saturating at sym_off_steps */
 } canfdi_diagnosis_pers_t;
 
+/* One verdict per fault as bits (bit i: catalogue fault id i): has a test
+ * (else "no such test"), passed, failed; a bit in has alone is "not tested".
+ * Masks, not an array of verdicts: a step combines them in a few word
+ * operations instead of a loop over the faults. */
+typedef struct {
+  uint32_t has;
+  uint32_t pass;
+  uint32_t fail;
+} canfdi_diagnosis_vmask_t;
+
 typedef struct {
   canfdi_diagnosis_cfg_t cfg;
   int32_t inv_pos_q16[CANFDI_DIAG_N_COMP][CANFDI_SYM_N_PAR]; /* 1 / threshold */
@@ -373,7 +383,7 @@ typedef struct {
   bool held[CANFDI_DIAG_N_COMP]; /* this step the component's model rules are
                                   * not tested: DC motor CANFDI_SYM_F_DCM_UNLEARNT
                                   * or _DCM_REARM, throttle _THR_REARM */
-  uint8_t mv_last[CANFDI_FAULT_COUNT]; /* model verdicts of the last full step */
+  canfdi_diagnosis_vmask_t mv_last; /* model verdicts of the last full step */
   bool corr_not_isolated;
   bool initialised;
   uint32_t failed_mask; /* bit i: fault i FAILED this step */
