@@ -402,7 +402,8 @@ int32_t canfdi_dtc_cycle_end(canfdi_dtc_t *m)
 }
 
 /*
- * A pass (PASSED or PREPASSED) that changes nothing: the debouncer sits on
+ * First a pass (PASSED or PREPASSED) that changes nothing
+ * (canfdi_dtc_pass_is_noop, canfdi_dtc.h): the debouncer sits on
  * its pass threshold with the pass qualified this cycle, and the status
  * already shows a passed test. The debouncer would keep its counter there
  * (a PREPASSED step only moves it down, and it is clamped at the threshold)
@@ -410,22 +411,13 @@ int32_t canfdi_dtc_cycle_end(canfdi_dtc_t *m)
  * clear: the report is answered without them. Most reports of every step
  * are this one (a healthy monitor passes again).
  */
-static bool pass_again(const canfdi_dtc_t *m, uint8_t index, canfdi_deb_report_t report)
-{
-  const canfdi_dtc_state_t *st = &m->dtc[index];
-  const canfdi_debounce_t *d = &st->deb;
-  return ((report == CANFDI_DEB_REPORT_PASSED) || (report == CANFDI_DEB_REPORT_PREPASSED)) &&
-         (d->cfg != NULL) && (d->counter == d->cfg->passed_threshold) && (d->status == (uint8_t)CANFDI_DEB_PASSED) &&
-         !d->test_failed && !d->test_not_completed_this_cycle &&
-         ((st->status & (CANFDI_DTC_ST_TF | CANFDI_DTC_ST_TNCSLC | CANFDI_DTC_ST_TNCTOC)) == 0U);
-}
-
 int32_t canfdi_dtc_report(canfdi_dtc_t *m, uint8_t index, canfdi_deb_report_t report,
                           const canfdi_dtc_ff_t *ff)
 {
   int32_t out = -CANFDI_EINVAL;
   if (bound(m)) {
-    if (m->cycle_active && (index < m->n_dtcs) && pass_again(m, index, report)) {
+    if (((report == CANFDI_DEB_REPORT_PASSED) || (report == CANFDI_DEB_REPORT_PREPASSED)) &&
+        canfdi_dtc_pass_is_noop(m, index)) {
       out = (int32_t)m->dtc[index].status;
     } else if (m->cycle_active && (index < m->n_dtcs) &&
                (canfdi_debounce_step(&m->dtc[index].deb, report) >= 0)) {

@@ -356,6 +356,28 @@ int32_t canfdi_dtc_report(canfdi_dtc_t *m, uint8_t index, canfdi_deb_report_t re
                           const canfdi_dtc_ff_t *ff);
 
 /*
+ * True when a PASSED or PREPASSED report of the DTC at `index` would change
+ * nothing: a cycle is active, the index is in range, and the DTC has passed
+ * and is settled there (its debouncer's counter on the passed threshold,
+ * no testFailed, test completed this cycle and since the last clear).
+ * canfdi_dtc_report returns the status at once in that case; this is the
+ * same test, inline, for a caller that gives many reports a step (the DTC
+ * routing) and can skip the call. False for NULL or unbound m. O(1).
+ */
+static inline bool canfdi_dtc_pass_is_noop(const canfdi_dtc_t *m, uint8_t index)
+{
+  bool r = false;
+  if ((m != NULL) && (m->table != NULL) && m->cycle_active && (index < m->n_dtcs)) {
+    const canfdi_dtc_state_t *st = &m->dtc[index];
+    const canfdi_debounce_t *d = &st->deb;
+    r = (d->cfg != NULL) && (d->counter == d->cfg->passed_threshold) && (d->status == (uint8_t)CANFDI_DEB_PASSED) &&
+        !d->test_failed && !d->test_not_completed_this_cycle &&
+        ((st->status & (CANFDI_DTC_ST_TF | CANFDI_DTC_ST_TNCSLC | CANFDI_DTC_ST_TNCTOC)) == 0U);
+  }
+  return r;
+}
+
+/*
  * ClearDiagnosticInformation (UDS 0x14): group_of_dtc CANFDI_DTC_GROUP_ALL
  * clears every DTC, a DTC number of the table clears that DTC. Returns
  * CANFDI_OK, or -CANFDI_EINVAL for NULL/unbound m or an unknown group
