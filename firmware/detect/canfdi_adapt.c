@@ -62,14 +62,17 @@ int32_t canfdi_adapt_step(canfdi_adapt_t *a, int32_t u)
   if ((a != NULL) && (a->cfg != NULL)) {
     const canfdi_adapt_cfg_t *cfg = a->cfg;
     if (a->primed) {
-      /* |du| < 2^32, times 10^6/T <= 10^4: < 2^46, exact. */
+      /* |du| < 2^32; |du| 10^6/T is compared before it is formed, so that
+       * the product that is formed fits 32 bits (a 64-bit product is a
+       * libgcc call on ARMv6-M) */
       int64_t du = (int64_t)u - (int64_t)a->u_prev;
       int64_t rate;
       du = (du < 0) ? -du : du;
-      rate = du * STEPS_PER_S;
-      if (rate > INT32_MAX) {
+      if (du > (INT32_MAX / STEPS_PER_S)) {
         rate = INT32_MAX;
         canfdi_count_inc(&a->diag.rate_saturations);
+      } else {
+        rate = (int64_t)((int32_t)du * (int32_t)STEPS_PER_S);
       }
       /* f and rate * 2^16 are in [0, 2^47): the difference cannot overflow
        * and a rounded step of alpha < 1 does not overshoot, so f >= 0. */
