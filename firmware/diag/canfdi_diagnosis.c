@@ -19,6 +19,7 @@ CANFDI_STATIC_ASSERT((CANFDI_DIAG_REPORT_FAILED == 1) && (CANFDI_DIAG_REPORT_PAS
                          (CANFDI_DIAG_REPORT_NONE == 0),
                      report_phase_computes_the_codes);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_COMP_THR < CANFDI_DIAG_N_COMP, components_fit);
+CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_COMP <= 8U, components_fit_the_hard_any_bits);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_RULES <= 32U, rules_fit_the_gate_mask);
 
 /* Most steps a low flux-loss prediction adds to a residual's hold (the
@@ -156,6 +157,7 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
       d->fresh[c][1] = 0U;
     }
     d->mv_last = (canfdi_diagnosis_vmask_t){0U, 0U, 0U};
+    d->hard.valid = false;
     for (j = 0U; j < CANFDI_DIAG_N_FLAGS; j++) {
       pers_clear(&d->flag[j], CANFDI_DIAG_SYM_ZERO);
     }
@@ -299,6 +301,10 @@ int32_t canfdi_diagnosis_init(canfdi_diagnosis_t *d, const canfdi_diagnosis_cfg_
       }
       d->fx_gated = flux_gated_rules(d->rule, &d->flux_rule);
       d->gain_rule = rule_of(CANFDI_FAULT_DCM_SPEED_SENSOR_GAIN);
+      d->hard_untested = 0U;
+      for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
+        d->hard_untested |= canfdi_diag_hard_rules[i].untested;
+      }
       d->diag = (canfdi_diagnosis_diag_t){0};
       d->initialised = true;
       canfdi_diagnosis_reset(d);
@@ -373,7 +379,15 @@ static bool pers_at_rest(const canfdi_diagnosis_pers_t *p)
   return (p->state == CANFDI_DIAG_SYM_ZERO) && (p->cand == CANFDI_DIAG_SYM_ZERO) && (p->n == 0U);
 }
 
-static void channel(canfdi_diagnosis_t *d, uint32_t c, uint32_t j, int32_t x, bool valid)
+/* A channel's step off its settled state (channel below). */
+static void channel_move(canfdi_diagnosis_t *d, canfdi_diagnosis_pers_t *p, int32_t x, bool valid)
+{
+  pers_step(p, valid, ternary(d, x, p->state), d->cfg.sym_on_steps, d->cfg.sym_off_steps);
+  channel_quiet(d, p, x, valid);
+}
+
+/* Inline: some twenty channels a step, nearly all settled. */
+static CANFDI_ALWAYS_INLINE void channel(canfdi_diagnosis_t *d, uint32_t c, uint32_t j, int32_t x, bool valid)
 {
   canfdi_diagnosis_pers_t *p = &d->ch[c][j];
   d->x_q16[c][j] = valid ? x : 0;
@@ -382,8 +396,7 @@ static void channel(canfdi_diagnosis_t *d, uint32_t c, uint32_t j, int32_t x, bo
      * ternary reads absent, the persistence rests, quiet stays settled);
      * the common case of every step */
   } else {
-    pers_step(p, valid, ternary(d, x, p->state), d->cfg.sym_on_steps, d->cfg.sym_off_steps);
-    channel_quiet(d, p, x, valid);
+    channel_move(d, p, x, valid);
   }
 }
 
@@ -495,9 +508,11 @@ static void update_channels(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
   channel(d, CANFDI_DIAG_COMP_THR, 9U, 0, false);
 }
 
-/* The flags' persistence: every step (full or hard rules only). */
-static void update_flags(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
+/* The flags' persistence: every step (full or hard rules only). Returns
+ * the persistent flags (bit i: flag i present). */
+static uint32_t update_flags(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
 {
+  uint32_t f = 0U;
   uint32_t i;
   for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
     const bool on = (s->flags & ((uint32_t)1U << i)) != 0U;
@@ -505,14 +520,6 @@ static void update_flags(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s)
       pers_step(&d->flag[i], true, on ? CANFDI_DIAG_SYM_POS : CANFDI_DIAG_SYM_ZERO, d->cfg.flag_on_steps,
                 d->cfg.flag_off_steps);
     }
-  }
-}
-
-static uint32_t flags_now(const canfdi_diagnosis_t *d)
-{
-  uint32_t f = 0U;
-  uint32_t i;
-  for (i = 0U; i < CANFDI_DIAG_N_FLAGS; i++) {
     if (d->flag[i].state == CANFDI_DIAG_SYM_POS) {
       f |= ((uint32_t)1U << i);
     }
@@ -613,18 +620,23 @@ static bool eval_rule(const canfdi_diagnosis_t *d, const canfdi_diagnosis_rule_t
   if (cand) {
     uint32_t tot = 0U;
     uint32_t match = 0U;
-    uint32_t j;
-    for (j = 0U; j < CANFDI_DIAG_N_CH; j++) {
+    uint32_t rest = seen; /* the seen channels not yet summed, from bit j on */
+    uint32_t j = 0U;
+    while (rest != 0U) {
       const uint32_t b = 1UL << j;
-      if ((seen & b) != 0U) {
+      if ((rest & 1U) != 0U) {
         const uint32_t w = d->w_q16[j] << (((m->nec & b) != 0U) ? 1U : 0U);
         tot += w;
         if ((hit & b) != 0U) {
           match += w;
         }
       }
+      rest >>= 1;
+      j++;
     }
-    *pct = (match * 100U) / tot;
+    /* seen != 0 and every weight >= 1.0: tot > 0 (the test is for the
+     * analyzer) */
+    *pct = (tot != 0U) ? ((match * 100U) / tot) : 0U;
   }
   return cand;
 }
@@ -714,7 +726,7 @@ typedef struct {
 
 /* Fault f's verdict becomes vd (V_NONE, V_PASS or V_FAIL; a later verdict
  * replaces an earlier one). */
-static void vset(canfdi_diagnosis_vmask_t *m, uint8_t f, uint8_t vd)
+static CANFDI_ALWAYS_INLINE void vset(canfdi_diagnosis_vmask_t *m, uint8_t f, uint8_t vd)
 {
   const uint32_t b = (uint32_t)1U << f;
   CANFDI_ASSERT((f < CANFDI_FAULT_COUNT) && (vd >= V_NONE) && (vd <= V_FAIL));
@@ -728,20 +740,31 @@ static bool vfailed(const canfdi_diagnosis_vmask_t *m, uint8_t f)
   return ((m->fail >> f) & 1U) != 0U;
 }
 
-/* Phase 1: the hard rules on this step's persistent flags. */
-static void hard_phase(const canfdi_symptoms_t *s, uint32_t flags, verdicts_t *v)
+/* Phase 1: the hard rules on this step's persistent flags (evaluated when
+ * their inputs changed, canfdi_diagnosis_hard_t). */
+static void hard_phase(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, uint32_t flags, verdicts_t *v)
 {
+  const uint32_t ut = s->flags & d->hard_untested;
   uint32_t i;
-  for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
-    const canfdi_diag_hard_rule_t *h = &canfdi_diag_hard_rules[i];
-    if ((s->flags & h->untested) != 0U) {
-      vset(&v->h, h->fault, V_NONE);
-    } else if (hard_fires(h, flags)) {
-      vset(&v->h, h->fault, V_FAIL);
-      v->hard_any[h->comp] = true;
-    } else {
-      vset(&v->h, h->fault, V_PASS);
+  if (!d->hard.valid || (flags != d->hard.flags) || (ut != d->hard.untested)) {
+    canfdi_diagnosis_vmask_t h = {0U, 0U, 0U};
+    uint8_t any = 0U;
+    for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
+      const canfdi_diag_hard_rule_t *r = &canfdi_diag_hard_rules[i];
+      if ((s->flags & r->untested) != 0U) {
+        vset(&h, r->fault, V_NONE);
+      } else if (hard_fires(r, flags)) {
+        vset(&h, r->fault, V_FAIL);
+        any = (uint8_t)(any | (1U << r->comp));
+      } else {
+        vset(&h, r->fault, V_PASS);
+      }
     }
+    d->hard = (canfdi_diagnosis_hard_t){h, flags, ut, any, true};
+  }
+  v->h = d->hard.v;
+  for (i = 0U; i < CANFDI_DIAG_N_COMP; i++) {
+    v->hard_any[i] = (((uint32_t)d->hard.any >> i) & 1U) != 0U;
   }
 }
 
@@ -932,16 +955,12 @@ static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     }
   } else {
     verdicts_t v;
-    uint32_t i;
+    uint32_t flags;
     canfdi_count_inc(&d->diag.steps);
-    update_flags(d, s);
+    flags = update_flags(d, s);
     update_channels(d, s);
-    v.h = (canfdi_diagnosis_vmask_t){0U, 0U, 0U};
-    v.m = model ? v.h : d->mv_last;
-    for (i = 0U; i < CANFDI_DIAG_N_COMP; i++) {
-      v.hard_any[i] = false;
-    }
-    hard_phase(s, flags_now(d), &v);
+    v.m = model ? (canfdi_diagnosis_vmask_t){0U, 0U, 0U} : d->mv_last;
+    hard_phase(d, s, flags, &v);
     if (model) {
       component_phase(d, &v);
     } else {

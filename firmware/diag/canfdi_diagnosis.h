@@ -218,10 +218,11 @@
  * counts, not cycles). Code (`make footprint`, the application image,
  * ROM tables included): 5.2 kB (M4), 5.5 kB (M0). Stack (-fstack-usage, M0): canfdi_diagnosis_step
  * 192 bytes, calling update_channels (80) which calls channel (40).
- * Memory: sizeof(canfdi_diagnosis_t) = 788 bytes on a 32-bit target (the
+ * Memory: sizeof(canfdi_diagnosis_t) = 816 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag
  * persistence, the normalised values, the compiled rules, the weights, the
- * results, the flux gate's counters, the diagnostics and the state). No heap, no globals besides const tables, no
+ * results, the hard rules' last verdicts, the flux gate's counters, the
+ * diagnostics and the state). No heap, no globals besides const tables, no
  * floating point; reentrant per instance.
  */
 #ifndef CANFDI_DIAGNOSIS_H
@@ -344,6 +345,18 @@ typedef struct {
   uint32_t fail;
 } canfdi_diagnosis_vmask_t;
 
+/* The hard rules' verdicts are a function of two words: the persistent
+ * flags and the symptom flags that mark rules untested. A step whose words
+ * equal the last ones takes the last verdicts (most steps) instead of
+ * evaluating the rules again. */
+typedef struct {
+  canfdi_diagnosis_vmask_t v; /* the verdicts for the words below */
+  uint32_t flags;             /* persistent flags (bit i: flag i present) */
+  uint32_t untested;          /* symptom flags & hard_untested */
+  uint8_t any;                /* bit c: a hard rule of component c fired */
+  bool valid;                 /* the above hold; false after a reset */
+} canfdi_diagnosis_hard_t;
+
 typedef struct {
   canfdi_diagnosis_cfg_t cfg;
   int32_t inv_pos_q16[CANFDI_DIAG_N_COMP][CANFDI_SYM_N_PAR]; /* 1 / threshold */
@@ -384,6 +397,10 @@ typedef struct {
                                   * not tested: DC motor CANFDI_SYM_F_DCM_UNLEARNT
                                   * or _DCM_REARM, throttle _THR_REARM */
   canfdi_diagnosis_vmask_t mv_last; /* model verdicts of the last full step */
+  canfdi_diagnosis_hard_t hard;      /* the hard rules' verdicts, kept while
+                                      * their inputs stay the same */
+  uint32_t hard_untested;            /* the symptom flags any hard rule's
+                                      * untested mask names */
   bool corr_not_isolated;
   bool initialised;
   uint32_t failed_mask; /* bit i: fault i FAILED this step */
