@@ -526,13 +526,14 @@ END_TEST
 START_TEST(uncertainty_band_tight_steady_wide_transient)
 {
   const double R = 1.52, psi = 0.33, i0 = 4.0, w0 = 100.0, ml = 1.2;
-  const double base1 = fq16(g_cfg.band[0].base), base2 = fq16(g_cfg.band[1].base),
-               base4 = fq16(g_cfg.band[3].base);
-  double dR, dL, z, thr1, thr2, thr4, slope;
+  double base1, base2, base4, dR, dL, z, thr1, thr2, thr4, slope;
   canfdi_parity_dcm_in_t in;
   const canfdi_parity_dcm_out_t *o = NULL;
   unsigned k;
-  init_default();
+  init_default(); /* first: the bases below are the defaults' */
+  base1 = fq16(g_cfg.band[0].base);
+  base2 = fq16(g_cfg.band[1].base);
+  base4 = fq16(g_cfg.band[3].base);
   dR = (double)g_cfg.unc_ra_ohm_q24 / 16777216.0;
   dL = (double)g_cfg.unc_la_H_q24 / 16777216.0;
   ck_assert(dR > 0.0);
