@@ -35,9 +35,9 @@
  * 64-bit divide call. num == 0 or den <= 0 gives {0, 0}. A value too large
  * for f >= 0 saturates to {INT32_MAX, 0} (unreachable for parameters inside
  * the validated domain); a value below 2^-200 becomes 0.
- * Cost: <= 62 + 62 normalisation shifts and 31 iterations of 64-bit
- * compare/subtract/shift: ~600 instructions on Cortex-M0+, run at init and
- * once per R_A block update only.
+ * Cost: a leading-zero count and one shift per operand, then 31
+ * iterations of 64-bit compare/subtract/shift; run at init and when an R_A
+ * block moves the estimate (four ratios then).
  */
 static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, int64_t den,
                                                 unsigned den_frac)
@@ -49,25 +49,28 @@ static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, 
      * num < 0 (INT64_MIN included) */
     uint64_t a = neg ? ((uint64_t)(-(num + 1)) + 1U) : (uint64_t)num;
     uint64_t b = (uint64_t)den;
-    const uint64_t top = (uint64_t)1U << 61;
     int32_t e = (int32_t)num_frac - (int32_t)den_frac; /* f = 30 + e after normalisation */
     uint64_t q = 0U;
     unsigned i;
-    while (a < top) {
-      a <<= 1;
-      e += 1;
-    }
-    while (a >= (top << 1)) { /* only for |num| >= 2^62 */
-      a >>= 1;
-      e -= 1;
-    }
-    while (b < top) {
-      b <<= 1;
-      e -= 1;
-    }
-    while (b >= (top << 1)) {
-      b >>= 1;
-      e += 1;
+    /* a and b into [2^61, 2^62) by one shift each (their leading one to
+     * bit 61: two leading zeros), the exponent following */
+    {
+      const unsigned za = canfdi_clz64(a); /* a != 0 */
+      const unsigned zb = canfdi_clz64(b); /* b > 0 */
+      if (za >= 2U) {
+        a <<= za - 2U;
+        e += (int32_t)za - 2;
+      } else {
+        a >>= 2U - za; /* only for |num| >= 2^62 */
+        e -= 2 - (int32_t)za;
+      }
+      if (zb >= 2U) {
+        b <<= zb - 2U;
+        e -= (int32_t)zb - 2;
+      } else {
+        b >>= 2U - zb;
+        e += 2 - (int32_t)zb;
+      }
     }
     /* a / b in (1/2, 2): q = round(a / b * 2^30) in [2^29, 2^31]. */
     if (a >= b) {
