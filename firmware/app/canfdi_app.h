@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      21 110   23 132   29 801
- *   Cortex-M4 (an386)      21 088   23 101   29 758
- *   Cortex-M0 (microbit)   41 512   47 931   60 900
- * and at most 30 695 (M4) / 63 953 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      20 019   21 962   28 248
+ *   Cortex-M4 (an386)      19 995   21 931   28 220
+ *   Cortex-M0 (microbit)   39 676   44 932   57 147
+ * and at most 28 973 (M4) / 60 414 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -124,16 +124,16 @@
  * (tests/pil/pil_profile.py; its split is summarised in
  * docs/requirements.md, requirement 1). A 1 ms step needs a Cortex-M4 of
  * roughly 40 MHz or more with margin (the worst step at ~1.2 cycles per
- * instruction: 37 MHz for the whole millisecond); on a Cortex-M0 at
+ * instruction: 35 MHz for the whole millisecond); on a Cortex-M0 at
  * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
  * halves, core/canfdi_fixp.h, and runs ~2.1 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 27 400 (M4) / 55 800
- * (M0) in those steps, within the same run's maxima (29 400 / 59 800).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 26 100 (M4) / 52 600
+ * (M0) in those steps, within the same run's maxima (27 900 / 56 200).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 30 695 / 63 953,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 28 973 / 60 414,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
@@ -155,10 +155,10 @@
  * fault is named up to one period later than unscheduled; the hard rules'
  * faults at the same step.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
- * all of the application's RAM, static: 10 976 bytes on Cortex-M (740 of
+ * all of the application's RAM, static: 10 984 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 488 B and 1 968 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 496 B and 1 968 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H

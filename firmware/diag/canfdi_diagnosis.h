@@ -205,19 +205,23 @@
  * truncated. No rounding elsewhere; nothing wraps.
  *
  * Cost per canfdi_diagnosis_step: 20 channel updates (9 with a 32x32->64
- * multiply), 10 flag updates, 11 hard rules (mask tests), and for a
- * component with a symptom its 7 model rules x <= 2 polarities: mask tests
- * for candidacy, then for a candidate a 10-entry weighted sum and one
- * 32-bit division (<= 28 per step). The patterns are compiled to bit masks
+ * multiply; a settled channel below its zero level is one inline test),
+ * 11 flag updates, the 12 hard rules (mask tests) only when the persistent
+ * flags or the untested symptom flags changed (canfdi_diagnosis_hard_t),
+ * the verdicts combined as bit masks, and for a component with a symptom
+ * its 7 model rules x <= 2 polarities: mask tests for candidacy, then for a
+ * candidate a weighted sum over its seen channels and one 32-bit division
+ * (<= 28 per step). The patterns are compiled to bit masks
  * at init (canfdi_diagnosis_rule_t), so the step never parses text.
  * canfdi_diagnosis_step_hard leaves out the model rules' matching. In
  * the application (the matching in one step of ten, the rest in every
  * step; `make bench-pil-profile`, dcm_ia_offset scenario, QEMU -icount,
- * arm-none-eabi-gcc -Os) this module's own code took 3 320 instructions
- * per step on average on Cortex-M4 and 4 450 on Cortex-M0 (instruction
+ * arm-none-eabi-gcc -Os) this module's own code took 2 260 instructions
+ * per step on average on Cortex-M4 and 3 040 on Cortex-M0 (instruction
  * counts, not cycles). Code (`make footprint`, the application image,
- * ROM tables included): 5.2 kB (M4), 5.5 kB (M0). Stack (-fstack-usage, M0): canfdi_diagnosis_step
- * 192 bytes, calling update_channels (80) which calls channel (40).
+ * ROM tables included): 5.3 kB (M4), 5.8 kB (M0). Stack (-fstack-usage,
+ * M0): diagnosis_step 152 bytes (update_channels inline), calling
+ * channel_move (40).
  * Memory: sizeof(canfdi_diagnosis_t) = 816 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag
  * persistence, the normalised values, the compiled rules, the weights, the

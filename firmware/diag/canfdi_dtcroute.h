@@ -41,9 +41,11 @@
  * Cost per canfdi_dtcroute_step: one pass over the faults (32 x 2 table
  * reads for those with a verdict), a compare of the 32 verdicts with the
  * last ones, a pass over the DTCs only when the verdicts or the memory
- * changed (32 reports at most, each a canfdi_dtc_report), the monitor bits
- * up to the highest one set (20 at most) and one report per DTC they feed
- * (collected as a bit mask, reported lowest index first).
+ * changed (32 reports at most, each a canfdi_dtc_report; a pass that
+ * would change nothing, canfdi_dtc_pass_is_noop, is counted without the
+ * call), the monitor bits up to the highest one set (20 at most) and one
+ * report per DTC they feed (collected as a bit mask, reported lowest index
+ * first).
  * manager_faults: one pass over the faults, a status read per
  * communication fault.
  * Memory: sizeof(canfdi_dtcroute_t) = 152 bytes on a 32-bit target (the
