@@ -57,19 +57,21 @@ static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, 
     {
       const unsigned za = canfdi_clz64(a); /* a != 0 */
       const unsigned zb = canfdi_clz64(b); /* b > 0 */
+      const unsigned sa = (za >= 2U) ? (za - 2U) : (2U - za);
+      const unsigned sb = (zb >= 2U) ? (zb - 2U) : (2U - zb);
       if (za >= 2U) {
-        a <<= za - 2U;
-        e += (int32_t)za - 2;
+        a <<= sa;
+        e += (int32_t)sa;
       } else {
-        a >>= 2U - za; /* only for |num| >= 2^62 */
-        e -= 2 - (int32_t)za;
+        a >>= sa; /* only for |num| >= 2^62 */
+        e -= (int32_t)sa;
       }
       if (zb >= 2U) {
-        b <<= zb - 2U;
-        e -= (int32_t)zb - 2;
+        b <<= sb;
+        e -= (int32_t)sb;
       } else {
-        b >>= 2U - zb;
-        e += 2 - (int32_t)zb;
+        b >>= sb;
+        e += (int32_t)sb;
       }
     }
     /* a / b in (1/2, 2): q = round(a / b * 2^30) in [2^29, 2^31]. */
