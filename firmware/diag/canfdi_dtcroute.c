@@ -198,8 +198,12 @@ uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t
     for (f = 1U; f < CANFDI_FAULT_COUNT; f++) {
       if (canfdi_catalogue_fault[f].kind == CANFDI_KIND_COMMUNICATION) {
         const uint8_t idx = r->fault_dtc[f][0];
-        const int32_t st = (idx != CANFDI_DTC_NONE) ? canfdi_dtc_status(dtc, idx) : 0;
-        if ((st > 0) && (((uint32_t)st & CANFDI_DTC_ST_TF) != 0U)) {
+        /* canfdi_dtc_status without the call: idx is an index of the
+         * memory's table (init), read only while it is bound */
+        const uint32_t st = ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs))
+                                ? (uint32_t)dtc->dtc[idx].status
+                                : 0U;
+        if ((st & CANFDI_DTC_ST_TF) != 0U) {
           bits |= CANFDI_FAULT_BIT(f);
         } else {
           bits &= ~CANFDI_FAULT_BIT(f);

@@ -167,7 +167,7 @@ static inline int64_t svf_bound(int64_t x)
  * 2^62. One function per k: a loop over a run-time k costs more than the
  * work.
  */
-static inline int32_t svf_out_k0(int64_t v, uint32_t *sat)
+static inline __attribute__((always_inline)) int32_t svf_out_k0(int64_t v, uint32_t *sat)
 {
   const int64_t x = canfdi_asr64_rnd(v, 16U);
   const int32_t y = canfdi_sat_s64_to_s32(x);
