@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      20 019   21 962   28 248
- *   Cortex-M4 (an386)      19 995   21 931   28 220
- *   Cortex-M0 (microbit)   39 676   44 932   57 147
- * and at most 28 973 (M4) / 60 414 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      19 921   21 832   28 101
+ *   Cortex-M4 (an386)      19 898   21 801   28 074
+ *   Cortex-M0 (microbit)   39 580   44 822   57 024
+ * and at most 28 833 (M4) / 60 297 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -130,10 +130,10 @@
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 26 100 (M4) / 52 600
- * (M0) in those steps, within the same run's maxima (27 900 / 56 200).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 25 900 (M4) / 52 500
+ * (M0) in those steps, within the same run's maxima (27 800 / 56 100).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 28 973 / 60 414,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 28 833 / 60 297,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
