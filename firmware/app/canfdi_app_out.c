@@ -46,7 +46,7 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
   uint32_t j;
   o->dtc_changes_seen = dtc->changes;
   for (j = 0U; j < n; j++) {
-    const uint8_t s = dtc->dtc[j].status; /* j < n_dtcs (canfdi_dtc_status without its checks) */
+    const uint8_t s = canfdi_dtc_status_at(dtc, (uint8_t)j); /* j < n_dtcs */
     if (s != o->dtc_status_sent[j]) {
       canfdi_tx_dtc_t ev;
       ev.dtc = dtc->table[j].dtc;
@@ -74,7 +74,7 @@ static void cyclic_dtc(canfdi_app_out_t *o, const canfdi_dtc_t *dtc, canfdi_tx_d
   *rec = (canfdi_tx_dtc_t){0};
   rec->count = count;
   for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
-    const uint8_t st = dtc->dtc[j].status; /* j < n_dtcs */
+    const uint8_t st = canfdi_dtc_status_at(dtc, (uint8_t)j); /* j < n_dtcs */
     if ((st & CANFDI_DTC_ST_TFSLC) != 0U) {
       if (n == want) {
         rec->dtc = dtc->table[j].dtc;

@@ -88,7 +88,9 @@ uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
 /* Signed: the unsigned product of the two bit patterns, whose high word
  * less b when a < 0 and less a when b < 0 (modulo 2^32) is the signed
  * product's high word (a = a_u - 2^32 [a < 0]); the low words agree. All in
- * 32-bit words: no 64-bit addition, which ARMv6-M builds from carries. */
+ * 32-bit words: no 64-bit addition, which ARMv6-M builds from carries. The
+ * unsigned words are canfdi_umull32_h16's, written out here rather than
+ * called: this product runs ~185 times a step. */
 int64_t canfdi_smull32_h16(int32_t a, int32_t b)
 {
   const uint32_t ua = (uint32_t)a;

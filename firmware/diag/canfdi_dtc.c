@@ -416,8 +416,7 @@ int32_t canfdi_dtc_report(canfdi_dtc_t *m, uint8_t index, canfdi_deb_report_t re
 {
   int32_t out = -CANFDI_EINVAL;
   if (bound(m)) {
-    if (((report == CANFDI_DEB_REPORT_PASSED) || (report == CANFDI_DEB_REPORT_PREPASSED)) &&
-        canfdi_dtc_pass_is_noop(m, index)) {
+    if (canfdi_dtc_pass_is_noop(m, index, report)) {
       out = (int32_t)m->dtc[index].status;
     } else if (m->cycle_active && (index < m->n_dtcs) &&
                (canfdi_debounce_step(&m->dtc[index].deb, report) >= 0)) {

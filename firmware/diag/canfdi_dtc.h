@@ -356,18 +356,20 @@ int32_t canfdi_dtc_report(canfdi_dtc_t *m, uint8_t index, canfdi_deb_report_t re
                           const canfdi_dtc_ff_t *ff);
 
 /*
- * True when a PASSED or PREPASSED report of the DTC at `index` would change
- * nothing: a cycle is active, the index is in range, and the DTC has passed
- * and is settled there (its debouncer's counter on the passed threshold,
- * no testFailed, test completed this cycle and since the last clear).
- * canfdi_dtc_report returns the status at once in that case; this is the
- * same test, inline, for a caller that gives many reports a step (the DTC
- * routing) and can skip the call. False for NULL or unbound m. O(1).
+ * True when `report` for the DTC at `index` would change nothing: it is a
+ * PASSED or PREPASSED, a cycle is active, the index is in range, and the
+ * DTC has passed and is settled there (its debouncer's counter on the
+ * passed threshold, no testFailed, test completed this cycle and since the
+ * last clear). canfdi_dtc_report returns the status at once in that case;
+ * this is the same test, inline, for a caller that gives many reports a
+ * step (the DTC routing) and can skip the call. False for NULL or unbound
+ * m. O(1).
  */
-static inline bool canfdi_dtc_pass_is_noop(const canfdi_dtc_t *m, uint8_t index)
+static inline bool canfdi_dtc_pass_is_noop(const canfdi_dtc_t *m, uint8_t index, canfdi_deb_report_t report)
 {
   bool r = false;
-  if ((m != NULL) && (m->table != NULL) && m->cycle_active && (index < m->n_dtcs)) {
+  if (((report == CANFDI_DEB_REPORT_PASSED) || (report == CANFDI_DEB_REPORT_PREPASSED)) && (m != NULL) &&
+      (m->table != NULL) && m->cycle_active && (index < m->n_dtcs)) {
     const canfdi_dtc_state_t *st = &m->dtc[index];
     const canfdi_debounce_t *d = &st->deb;
     r = (d->cfg != NULL) && (d->counter == d->cfg->passed_threshold) && (d->status == (uint8_t)CANFDI_DEB_PASSED) &&
@@ -397,6 +399,14 @@ int32_t canfdi_dtc_find(const canfdi_dtc_t *m, uint32_t dtc);
 
 /* Status byte of the DTC at `index` (0..255), or -CANFDI_EINVAL. O(1). */
 int32_t canfdi_dtc_status(const canfdi_dtc_t *m, uint8_t index);
+
+/* The same byte inline and unchecked, for the scans of the table in the
+ * 1 ms step: m bound and index < m->n_dtcs are the caller's (asserted). */
+static inline uint8_t canfdi_dtc_status_at(const canfdi_dtc_t *m, uint8_t index)
+{
+  CANFDI_ASSERT((m != NULL) && (m->table != NULL) && (index < m->n_dtcs));
+  return m->dtc[index].status;
+}
 
 /* Occurrence counter of the DTC at `index` (its event-memory entry's; 0
  * without an entry, for a bad index or NULL): canfdi_dtc_read_record's

@@ -109,8 +109,7 @@ static int32_t report(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint8_t idx, canf
 {
   int32_t rejected = 0;
   canfdi_count_inc(&r->diag.reports);
-  if (((rep == CANFDI_DEB_REPORT_PASSED) || (rep == CANFDI_DEB_REPORT_PREPASSED)) &&
-      canfdi_dtc_pass_is_noop(dtc, idx)) {
+  if (canfdi_dtc_pass_is_noop(dtc, idx, rep)) {
     /* answered: the status stands */
   } else if (canfdi_dtc_report(dtc, idx, rep, ff) < 0) {
     canfdi_count_inc(&r->diag.reports_rejected);
@@ -198,11 +197,8 @@ uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t
     for (f = 1U; f < CANFDI_FAULT_COUNT; f++) {
       if (canfdi_catalogue_fault[f].kind == CANFDI_KIND_COMMUNICATION) {
         const uint8_t idx = r->fault_dtc[f][0];
-        /* canfdi_dtc_status without the call: idx is an index of the
-         * memory's table (init), read only while it is bound */
-        const uint32_t st = ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs))
-                                ? (uint32_t)dtc->dtc[idx].status
-                                : 0U;
+        const uint8_t st =
+            ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs)) ? canfdi_dtc_status_at(dtc, idx) : 0U;
         if ((st & CANFDI_DTC_ST_TF) != 0U) {
           bits |= CANFDI_FAULT_BIT(f);
         } else {

@@ -55,24 +55,13 @@ static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, 
     /* a and b into [2^61, 2^62) by one shift each (their leading one to
      * bit 61: two leading zeros), the exponent following */
     {
-      const unsigned za = canfdi_clz64(a); /* a != 0 */
-      const unsigned zb = canfdi_clz64(b); /* b > 0 */
-      const unsigned sa = (za >= 2U) ? (za - 2U) : (2U - za);
-      const unsigned sb = (zb >= 2U) ? (zb - 2U) : (2U - zb);
-      if (za >= 2U) {
-        a <<= sa;
-        e += (int32_t)sa;
-      } else {
-        a >>= sa; /* only for |num| >= 2^62 */
-        e -= (int32_t)sa;
-      }
-      if (zb >= 2U) {
-        b <<= sb;
-        e -= (int32_t)sb;
-      } else {
-        b >>= sb;
-        e += (int32_t)sb;
-      }
+      const int32_t ka = (int32_t)canfdi_clz64(a) - 2; /* a != 0 */
+      const int32_t kb = (int32_t)canfdi_clz64(b) - 2; /* b > 0 */
+      const unsigned sa = (unsigned)((ka >= 0) ? ka : -ka);
+      const unsigned sb = (unsigned)((kb >= 0) ? kb : -kb);
+      a = (ka >= 0) ? (a << sa) : (a >> sa); /* right only for |num| >= 2^62 */
+      b = (kb >= 0) ? (b << sb) : (b >> sb);
+      e += ka - kb;
     }
     /* a / b in (1/2, 2): q = round(a / b * 2^30) in [2^29, 2^31]. */
     if (a >= b) {

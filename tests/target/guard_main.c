@@ -698,7 +698,8 @@ static void guard_dtc(void)
   sink32(canfdi_dtc_report(&dtc, idx, (canfdi_deb_report_t)in_u32, &ff));
   sink32(canfdi_dtc_find(&dtc, in_u32));
   sink32(canfdi_dtc_status(&dtc, idx));
-  sink32(canfdi_dtc_pass_is_noop(&dtc, idx) ? 1 : 0);
+  sink32(canfdi_dtc_pass_is_noop(&dtc, idx, (canfdi_deb_report_t)in_u32) ? 1 : 0);
+  sink32((int32_t)canfdi_dtc_status_at(&dtc, (uint8_t)(idx % CANFDI_DTC_COUNT)));
   sink32(canfdi_dtc_fdc(&dtc, idx));
   sink32((int32_t)canfdi_dtc_occurrence(&dtc, idx));
   sink32((int32_t)canfdi_dtc_count_by_mask(&dtc, (uint8_t)in_u32));
