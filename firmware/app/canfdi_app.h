@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      19 921   21 832   28 101
- *   Cortex-M4 (an386)      19 898   21 801   28 074
- *   Cortex-M0 (microbit)   39 580   44 822   57 024
- * and at most 28 833 (M4) / 60 297 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      19 923   21 834   28 123
+ *   Cortex-M4 (an386)      19 899   21 803   28 095
+ *   Cortex-M0 (microbit)   39 580   44 821   57 027
+ * and at most 28 863 (M4) / 60 297 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -133,7 +133,7 @@
  * of tests/sil/scenarios/uds_workshop.scn): at most 25 900 (M4) / 52 500
  * (M0) in those steps, within the same run's maxima (27 800 / 56 100).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 28 833 / 60 297,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 28 863 / 60 297,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
