@@ -45,7 +45,7 @@ static uint8_t comp_of_catalogue(uint8_t component)
   return c;
 }
 
-static int32_t abs_sat(int32_t x)
+static CANFDI_ALWAYS_INLINE int32_t abs_sat(int32_t x)
 {
   return (x >= 0) ? x : ((x == INT32_MIN) ? INT32_MAX : -x);
 }
@@ -374,7 +374,7 @@ static void channel_quiet(const canfdi_diagnosis_t *d, canfdi_diagnosis_pers_t *
 
 /* A persistence at rest on "absent": a step that reads absent again leaves
  * it as it is (pers_step would only rewrite the same values). */
-static bool pers_at_rest(const canfdi_diagnosis_pers_t *p)
+static CANFDI_ALWAYS_INLINE bool pers_at_rest(const canfdi_diagnosis_pers_t *p)
 {
   return (p->state == CANFDI_DIAG_SYM_ZERO) && (p->cand == CANFDI_DIAG_SYM_ZERO) && (p->n == 0U);
 }

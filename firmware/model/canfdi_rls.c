@@ -196,6 +196,31 @@ static xf_t xf_make(int64_t v, int32_t e)
   return r;
 }
 
+/* xf_make for a 32-bit v: the same m and e (exact up to 2^30 in
+ * magnitude, rounded half up above), from one 32-bit CLZ instead of the
+ * 64-bit normalisation. The read-out of theta, several times a step. */
+static xf_t xf_make32(int32_t v, int32_t e)
+{
+  xf_t r = {0, 0};
+  if (v != 0) {
+    const uint32_t mag = (v < 0) ? (0U - (uint32_t)v) : (uint32_t)v;
+    const int32_t len = 32 - (int32_t)canfdi_clz32(mag); /* mag < 2^len */
+    uint32_t m;
+    r.e = (e + len) - 30;
+    if (len <= 30) {
+      m = mag << (unsigned)(30 - len);
+    } else {
+      m = (mag >> (unsigned)(len - 30)) + ((mag >> (unsigned)(len - 31)) & 1U);
+      if (m == 0x40000000U) {
+        m = 0x20000000U;
+        r.e += 1;
+      }
+    }
+    r.m = (v < 0) ? -(int32_t)m : (int32_t)m;
+  }
+  return r;
+}
+
 static xf_t xf_mul(xf_t a, xf_t b)
 {
   return xf_make((int64_t)a.m * (int64_t)b.m, a.e + b.e);
@@ -961,7 +986,7 @@ int32_t canfdi_rls_theta_qn(const canfdi_rls_t *r, unsigned i, unsigned frac)
   int32_t y = 0;
   CANFDI_ASSERT(r != NULL);
   if ((i < r->cfg.n_params) && (frac <= 31U)) {
-    const xf_t t = xf_make(r->theta[i], r->theta_e + (int32_t)r->cfg.y_shift - (int32_t)r->cfg.phi_shift[i]);
+    const xf_t t = xf_make32(r->theta[i], r->theta_e + (int32_t)r->cfg.y_shift - (int32_t)r->cfg.phi_shift[i]);
     y = xf_to_s32(t, (int32_t)frac);
   }
   return y;
