@@ -250,6 +250,11 @@ int32_t canfdi_div_s32_qn(int32_t num, int32_t den, unsigned n)
     y = div_by_zero_s32(num);
   } else if (num == 0) {
     y = 0;
+  } else if ((n < 31U) && ((mag_u32(num) >> (31U - n)) == 0U)) {
+    /* |num| 2^n < 2^31, the common case: one 32-bit division, and the
+     * rounded quotient (at most |num| 2^n) needs no saturation */
+    const uint32_t q = udiv_rnd_u32(mag_u32(num) << n, mag_u32(den));
+    y = negative ? -(int32_t)q : (int32_t)q;
   } else if ((n > 32U) && ((n >= 63U) || ((mag_u32(num) >> (63U - n)) != 0U))) {
     /* |num| * 2^n >= 2^63 and |den| <= 2^31, so |quotient| >= 2^32: it
      * saturates, and the shift below would lose bits. */
