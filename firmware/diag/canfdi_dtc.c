@@ -521,16 +521,14 @@ int8_t canfdi_dtc_fdc(const canfdi_dtc_t *m, uint8_t index)
 
 uint16_t canfdi_dtc_count_by_mask(const canfdi_dtc_t *m, uint8_t mask)
 {
-  uint16_t n = 0U;
+  uint32_t n = 0U;
   if (bound(m)) {
     const uint8_t eff = (uint8_t)(mask & CANFDI_DTC_STATUS_AVAILABILITY_MASK);
     for (uint8_t i = 0U; i < m->n_dtcs; i++) {
-      if ((m->dtc[i].status & eff) != 0U) {
-        n++;
-      }
+      n += ((m->dtc[i].status & eff) != 0U) ? 1U : 0U; /* no branch */
     }
   }
-  return n;
+  return (uint16_t)n; /* n <= n_dtcs */
 }
 
 int32_t canfdi_dtc_next_by_mask(const canfdi_dtc_t *m, uint8_t mask, uint16_t *cursor,

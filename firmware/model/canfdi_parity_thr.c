@@ -45,7 +45,7 @@ static int32_t pthr_q32_to_q16(int64_t x)
 }
 
 /* Q40 (int64) -> Q24 (int32), rounded half up, saturated. */
-static int32_t pthr_q40_to_q24(int64_t x)
+static CANFDI_ALWAYS_INLINE int32_t pthr_q40_to_q24(int64_t x)
 {
   return canfdi_sat_s64_to_s32(canfdi_asr64_rnd(x, 16U));
 }

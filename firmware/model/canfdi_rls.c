@@ -250,7 +250,10 @@ static xf_t xf_from_pf(pf_t a, bool neg)
   return xf_make(neg ? -v : v, a.e - 32);
 }
 
-/* round(a 2^frac), saturated to int32_t. */
+/* round(a 2^frac) (half up), saturated to int32_t. The rounding shift is
+ * written out (canfdi_asr32_rnd's two terms): a call would cost as much,
+ * several times a step. Its count is clamped to 31: with |a.m| < 2^30 any
+ * larger one gives 0 alike. */
 static int32_t xf_to_s32(xf_t a, int32_t frac)
 {
   const int32_t sh = a.e + frac;
@@ -259,7 +262,8 @@ static int32_t xf_to_s32(xf_t a, int32_t frac)
     if (sh >= 0) {
       y = canfdi_shl32_sat(a.m, (unsigned)((sh > 31) ? 31 : sh));
     } else {
-      y = canfdi_asr32_rnd(a.m, (unsigned)((-sh > 32) ? 32 : -sh));
+      const unsigned k = (unsigned)((-sh > 31) ? 31 : -sh);
+      y = canfdi_asr32(a.m, k) + (int32_t)(((uint32_t)a.m >> (k - 1U)) & 1U);
     }
   }
   return y;
