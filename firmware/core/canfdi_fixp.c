@@ -115,6 +115,62 @@ int64_t canfdi_usmull32_h16(uint32_t a, int32_t b)
   return canfdi_wrap_u64_to_s64((b < 0) ? (p - ((uint64_t)a << 32)) : p);
 }
 
+/* a = ah 2^32 + al (ah signed, al unsigned): a g = ah g 2^32 + al g, so
+ * round(a g / 2^31) = 2 ah g + round(al g / 2^31) exactly. Both products
+ * are formed from 16-bit halves as in canfdi_smull32_h16 (al g as the
+ * unsigned product less al 2^32 when g < 0); al g (|al g| < 2^63) is
+ * shifted by 31 on its two words, and the sum is carried word by word.
+ * |ah| < 2^24, so |2 ah g| < 2^56 and nothing wraps. */
+int64_t canfdi_mul_s56_q31_rnd_h16(int64_t a, int32_t g)
+{
+  const uint64_t ua = (uint64_t)a;
+  const uint32_t al = (uint32_t)ua;
+  const uint32_t ah = (uint32_t)(ua >> 32); /* the signed high word's bits */
+  const uint32_t ug = (uint32_t)g;
+  const uint32_t gl = ug & 0xFFFFU;
+  const uint32_t gh = ug >> 16;
+  const uint32_t gneg = 0U - (ug >> 31); /* all ones when g < 0 */
+  uint32_t xh;
+  uint32_t xl;
+  uint32_t hh;
+  uint32_t hl;
+  uint32_t rl;
+  uint32_t rh;
+  uint32_t s;
+  {
+    /* al g: unsigned words, then less al 2^32 for a negative g */
+    const uint32_t a0 = al & 0xFFFFU;
+    const uint32_t a1 = al >> 16;
+    const uint32_t ll = a0 * gl;
+    const uint32_t lh = a0 * gh;
+    const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (a1 * gl);
+    xh = (((a1 * gh) + (lh >> 16)) + (mid >> 16)) - (al & gneg);
+    xl = (mid << 16) | (ll & 0xFFFFU);
+  }
+  {
+    /* ah g, signed: the unsigned words less the two corrections */
+    const uint32_t a0 = ah & 0xFFFFU;
+    const uint32_t a1 = ah >> 16;
+    const uint32_t ll = a0 * gl;
+    const uint32_t lh = a0 * gh;
+    const uint32_t mid = (ll >> 16) + (lh & 0xFFFFU) + (a1 * gl);
+    const uint32_t corr = (ug & (0U - (ah >> 31))) + (ah & gneg);
+    hh = (((a1 * gh) + (lh >> 16)) + (mid >> 16)) - corr;
+    hl = (mid << 16) | (ll & 0xFFFFU);
+  }
+  /* 2 ah g */
+  rl = hl << 1;
+  rh = (hh << 1) | (hl >> 31);
+  /* + floor(al g / 2^31): its words are (sign of xh, xh 2 + xl's top bit) */
+  s = rl + ((xh << 1) | (xl >> 31));
+  rh += (0U - (xh >> 31)) + ((s < rl) ? 1U : 0U);
+  rl = s;
+  /* + the last bit shifted out (half up) */
+  s = rl + ((xl >> 30) & 1U);
+  rh += (s < rl) ? 1U : 0U;
+  return canfdi_wrap_u64_to_s64(((uint64_t)rh << 32) | s);
+}
+
 /* |x| as an unsigned value; exact for INT32_MIN (2^31). */
 static uint32_t mag_u32(int32_t x)
 {

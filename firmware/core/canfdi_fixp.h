@@ -236,6 +236,12 @@ uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b);
 int64_t canfdi_smull32_h16(int32_t a, int32_t b);
 /* Unsigned a times signed b. */
 int64_t canfdi_usmull32_h16(uint32_t a, int32_t b);
+/* round(a g / 2^31), half up, for |a| < 2^56 and a Q31 g (|result| <
+ * 2^56): the filters' product (model/canfdi_svf.c) on ARMv6-M in one call,
+ * eight 16x16->32 multiplies and 32-bit words, where the general form
+ * takes a signed and an unsigned 32x32->64 product (two calls) and a
+ * 64-bit shift and sum. Exact: the same bits as the 64-bit form. */
+int64_t canfdi_mul_s56_q31_rnd_h16(int64_t a, int32_t g);
 
 /* a b for unsigned 32-bit operands: UMULL (ARMv6-M: the halves). */
 static inline uint64_t canfdi_umull32(uint32_t a, uint32_t b)
@@ -275,6 +281,27 @@ static inline int64_t canfdi_usmull32(uint32_t a, int32_t b)
 #else
   return (int64_t)a * (int64_t)b;
 #endif
+}
+
+/*
+ * c w for |c| <= 2^47 and w in 0..32767 (exact, |c w| < 2^62) from three
+ * 32-bit multiplies, for ARMv6-M, where the 64-bit product calls libgcc's
+ * 64x64 multiply: with c = ch 2^32 + cl (ch the signed high word,
+ * |ch| <= 2^15) and cl = c1 2^16 + c0, the products ch w, c1 w and c0 w
+ * are each below 2^31, and c w = ch w 2^32 + c1 w 2^16 + c0 w is summed in
+ * 32-bit words. The same bits as c * w (tests/unit/test_fixp).
+ */
+static CANFDI_ALWAYS_INLINE int64_t canfdi_mul_s48_u15_h16(int64_t c, int32_t w)
+{
+  const uint64_t u = (uint64_t)c;
+  const uint32_t cl = (uint32_t)u;
+  const int32_t ch = canfdi_wrap_u32_to_s32((uint32_t)(u >> 32));
+  const uint32_t uw = (uint32_t)w;
+  const uint32_t p0 = (cl & 0xFFFFU) * uw;
+  const uint32_t p1 = (cl >> 16) * uw;
+  const uint32_t lo = p0 + (p1 << 16);
+  const uint32_t hi = ((uint32_t)(ch * w) + (p1 >> 16)) + ((lo < p0) ? 1U : 0U);
+  return canfdi_wrap_u64_to_s64(((uint64_t)hi << 32) | lo);
 }
 
 /*

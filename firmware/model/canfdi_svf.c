@@ -127,12 +127,16 @@ void canfdi_svf_reset(canfdi_svf_t *f, int32_t x0_q16)
  * without its saturation, which cannot act in this range (|result| < 2^56).
  * a = ah 2^32 + al (ah the floor, al in [0, 2^32)): 2 ah g is exact and
  * adding it does not change the rounding of al g / 2^31.
- * Cost: SMULL and UMULL with a sign fix on ARMv7-M, their 16-bit halves
- * on ARMv6-M (core/canfdi_intrin.h; libgcc's 64x64 multiply costs about
- * twice as much); inline, as a call costs more than the work.
+ * Cost: SMULL and UMULL with a sign fix on ARMv7-M, inline, as a call
+ * costs more than the work; on ARMv6-M one call that builds both
+ * products from 16-bit halves (canfdi_mul_s56_q31_rnd_h16, the same bits;
+ * libgcc's 64x64 multiply costs about twice as much).
  */
 static inline __attribute__((always_inline)) int64_t svf_mul_q31(int64_t a, int32_t g)
 {
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_mul_s56_q31_rnd_h16(a, g);
+#else
   /* the high word read as signed is floor(a / 2^32): |ah| < 2^24 */
   const int32_t ah = canfdi_wrap_u32_to_s32((uint32_t)((uint64_t)a >> 32));
   const uint32_t al = (uint32_t)((uint64_t)a & 0xFFFFFFFFU);
@@ -143,6 +147,7 @@ static inline __attribute__((always_inline)) int64_t svf_mul_q31(int64_t a, int3
   const uint64_t alg = canfdi_umull32(al, (uint32_t)g) - ((g < 0) ? ((uint64_t)al << 32) : 0U);
   const int64_t lo = canfdi_asr64_rnd(canfdi_wrap_u64_to_s64(alg), 31U);
   return (2 * hi) + lo;
+#endif
 }
 
 /* x limited to +-SVF_V_BOUND (see svf_state_add). */
@@ -177,18 +182,30 @@ static inline __attribute__((always_inline)) int32_t svf_out_k0(int64_t v, uint3
   return y;
 }
 
+/* c wc for |c| <= 2^47 (the clamp) and wc in 1..32767: exact. On
+ * ARMv6-M from 32-bit multiplies (canfdi_mul_s48_u15_h16), not libgcc's
+ * 64x64 multiply. */
+static inline __attribute__((always_inline)) int64_t svf_mul_wc(int64_t c, int32_t wc)
+{
+#if defined(__ARM_ARCH_6M__)
+  return canfdi_mul_s48_u15_h16(c, wc);
+#else
+  return c * (int64_t)wc;
+#endif
+}
+
 static inline int32_t svf_out_k1(int64_t v, int32_t wc, uint32_t *sat)
 {
   const int64_t c = (v > SVF_V_CLAMP) ? SVF_V_CLAMP : ((v < -SVF_V_CLAMP) ? -SVF_V_CLAMP : v);
-  return svf_out_k0(c * (int64_t)wc, sat);
+  return svf_out_k0(svf_mul_wc(c, wc), sat);
 }
 
 static inline int32_t svf_out_k2(int64_t v, int32_t wc, uint32_t *sat)
 {
   const int64_t c = (v > SVF_V_CLAMP) ? SVF_V_CLAMP : ((v < -SVF_V_CLAMP) ? -SVF_V_CLAMP : v);
-  int64_t x = c * (int64_t)wc;
+  int64_t x = svf_mul_wc(c, wc);
   x = (x > SVF_V_CLAMP) ? SVF_V_CLAMP : ((x < -SVF_V_CLAMP) ? -SVF_V_CLAMP : x);
-  return svf_out_k0(x * (int64_t)wc, sat);
+  return svf_out_k0(svf_mul_wc(x, wc), sat);
 }
 
 /*

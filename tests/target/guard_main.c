@@ -104,6 +104,8 @@ static void guard_fixp(void)
   sink32((int32_t)canfdi_umulhi32_h16(in_u32, (uint32_t)b));
   sink64(canfdi_smull32_h16(a, b));
   sink64(canfdi_usmull32_h16(in_u32, b));
+  sink64(canfdi_mul_s56_q31_rnd_h16(in_s64[0] / 256, b));
+  sink64(canfdi_mul_s48_u15_h16(in_s64[1] / 65536, b & 0x7FFF));
   sink32(canfdi_clamp_s32(a, b, c));
   sink32(canfdi_asr32(a, n));
   sink64(canfdi_asr64(a64, n));

@@ -1099,6 +1099,76 @@ START_TEST(test_mul_halves)
 }
 END_TEST
 
+/* round(a g / 2^31) for |a| < 2^56 from 16-bit halves against the host's
+ * 128-bit product, and c w (|c| <= 2^47, w < 2^15) from 32-bit multiplies
+ * against the 64-bit one: edge values, then a sweep over the operand
+ * sizes. */
+__extension__ typedef __int128 test_i128; /* GCC and clang on 64-bit hosts */
+static int64_t ref_mul_s56_q31_rnd(int64_t a, int32_t g)
+{
+  const test_i128 p = ((test_i128)a * g) + ((test_i128)1 << 30);
+  return (int64_t)(p >> 31); /* GCC and clang: an arithmetic shift */
+}
+
+START_TEST(test_mul_s56_q31_halves)
+{
+  static const int64_t ae[] = {0, 1, -1, 2, -2, 0x7FFFFFFF, -0x80000000LL, 0xFFFFFFFFLL, 0x100000000LL, -0x100000000LL,
+                               ((int64_t)1 << 56) - 1, -(((int64_t)1 << 56) - 1), ((int64_t)1 << 40) + 12345,
+                               -((int64_t)1 << 47)};
+  static const int32_t ge[] = {0, 1, -1, 2, INT32_MAX, INT32_MIN, INT32_MIN + 1, 0x40000000, -0x40000000, 0x12345678,
+                               -0x12345678, 0xFFFF, 0x10000};
+  uint32_t s = 0x9E3779B9U;
+  unsigned i;
+  unsigned j;
+  unsigned k;
+  for (i = 0U; i < sizeof ae / sizeof ae[0]; i++) {
+    for (j = 0U; j < sizeof ge / sizeof ge[0]; j++) {
+      ck_assert(canfdi_mul_s56_q31_rnd_h16(ae[i], ge[j]) == ref_mul_s56_q31_rnd(ae[i], ge[j]));
+    }
+  }
+  /* c w for |c| <= 2^47, w in 0..32767 */
+  {
+    static const int64_t ce[] = {0, 1, -1, 0xFFFF, 0x10000, -0x10000, 0xFFFFFFFFLL, -0xFFFFFFFFLL, 0x100000000LL,
+                                 -0x100000000LL, (int64_t)1 << 47, -((int64_t)1 << 47), ((int64_t)1 << 47) - 1,
+                                 -((int64_t)1 << 47) + 1};
+    static const int32_t we[] = {0, 1, 2, 0x7FFF, 0x4000, 12345};
+    for (i = 0U; i < sizeof ce / sizeof ce[0]; i++) {
+      for (j = 0U; j < sizeof we / sizeof we[0]; j++) {
+        ck_assert(canfdi_mul_s48_u15_h16(ce[i], we[j]) == ce[i] * (int64_t)we[j]);
+      }
+    }
+  }
+  for (k = 0U; k < 200000U; k++) {
+    uint64_t a;
+    int64_t av;
+    int32_t g;
+    s ^= s << 13;
+    s ^= s >> 17;
+    s ^= s << 5;
+    a = (uint64_t)s << 32;
+    s ^= s << 13;
+    s ^= s >> 17;
+    s ^= s << 5;
+    a |= s;
+    /* a size of 0..56 bits, either sign */
+    av = (int64_t)(a >> (8U + (k % 56U)));
+    av = ((k & 1U) != 0U) ? -av : av;
+    s ^= s << 13;
+    s ^= s >> 17;
+    s ^= s << 5;
+    g = canfdi_wrap_u32_to_s32(s >> ((k / 57U) % 32U));
+    g = (((k & 2U) != 0U) && (g != INT32_MIN)) ? -g : g;
+    ck_assert(canfdi_mul_s56_q31_rnd_h16(av, g) == ref_mul_s56_q31_rnd(av, g));
+    {
+      /* the same operands cut to |c| <= 2^47, w < 2^15 */
+      const int64_t c = av / 512;
+      const int32_t w = (int32_t)(((uint32_t)g >> 17) & 0x7FFFU);
+      ck_assert(canfdi_mul_s48_u15_h16(c, w) == c * (int64_t)w);
+    }
+  }
+}
+END_TEST
+
 /* canfdi_recip_q63: 2^63 / v from below, within 2^-30.4 (here: v q <= 2^63
  * and 2^63 - v q < 4 v, i.e. q within 4 units of the floor), below 2^32,
  * on every interval boundary of its seed table and on a sweep. */
@@ -1147,6 +1217,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_intrin);
   tcase_add_test(tc, test_recip_q63);
   tcase_add_test(tc, test_mul_halves);
+  tcase_add_test(tc, test_mul_s56_q31_halves);
   tcase_add_loop_test(tc, test_shl, 0, N_SHIFT_GROUPS);
   suite_add_tcase(s, tc);
 
