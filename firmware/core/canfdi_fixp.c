@@ -120,7 +120,7 @@ int64_t canfdi_usmull32_h16(uint32_t a, int32_t b)
  * are formed from 16-bit halves as in canfdi_smull32_h16 (al g as the
  * unsigned product less al 2^32 when g < 0); al g (|al g| < 2^63) is
  * shifted by 31 on its two words, and the sum is carried word by word.
- * |ah| < 2^24, so |2 ah g| < 2^56 and nothing wraps. */
+ * |ah| <= 2^24, so |2 ah g| <= 2^56 and nothing wraps. */
 int64_t canfdi_mul_s56_q31_rnd_h16(int64_t a, int32_t g)
 {
   const uint64_t ua = (uint64_t)a;

@@ -236,11 +236,12 @@ uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b);
 int64_t canfdi_smull32_h16(int32_t a, int32_t b);
 /* Unsigned a times signed b. */
 int64_t canfdi_usmull32_h16(uint32_t a, int32_t b);
-/* round(a g / 2^31), half up, for |a| < 2^56 and a Q31 g (|result| <
- * 2^56): the filters' product (model/canfdi_svf.c) on ARMv6-M in one call,
- * eight 16x16->32 multiplies and 32-bit words, where the general form
- * takes a signed and an unsigned 32x32->64 product (two calls) and a
- * 64-bit shift and sum. Exact: the same bits as the 64-bit form. */
+/* round(a g / 2^31), half up, for -2^56 <= a < 2^56 and a Q31 g (|result|
+ * <= 2^56): on ARMv6-M the filters' product (model/canfdi_svf.c) and
+ * canfdi_mul_s64_q31 in that range, in one call, eight 16x16->32
+ * multiplies and 32-bit words, where the general form takes a signed and
+ * an unsigned 32x32->64 product (two calls) and a 64-bit shift and sum.
+ * Exact: the same bits as the 64-bit form. */
 int64_t canfdi_mul_s56_q31_rnd_h16(int64_t a, int32_t g);
 
 /* a b for unsigned 32-bit operands: UMULL (ARMv6-M: the halves). */
@@ -624,17 +625,29 @@ static inline int32_t canfdi_mul_s32_qn(int32_t a, int32_t b, unsigned n)
  * INT64_MIN/MAX (only when |a| is near 2^63 and |b| near 1).
  * Rounding: half up. Cost: two 32x32->64 multiplies (M4: SMULL + a signed x
  * unsigned 64-bit product; M0+: their 16-bit halves), constant shifts, two
- * 64-bit adds with saturation checks.
+ * 64-bit adds with saturation checks. On ARMv6-M an a within 2^56 (every
+ * filter state of the firmware) takes canfdi_mul_s56_q31_rnd_h16 instead:
+ * one call for three, the same bits (no saturation can act there).
  */
 static inline int64_t canfdi_mul_s64_q31(int64_t a, canfdi_q31_t b)
 {
   const int32_t ah = (int32_t)canfdi_asr64(a, 32U);             /* in int32 range */
-  const uint32_t al = (uint32_t)((uint64_t)a & 0xFFFFFFFFU);     /* in [0, 2^32) */
-  const int64_t hi = canfdi_smull32(ah, b);                      /* |hi| <= 2^62 */
-  const int64_t lo = canfdi_asr64_rnd(canfdi_usmull32(al, b), 31U); /* |lo| <= 2^32 */
-  /* 2*hi may overflow on its own while 2*hi + lo does not: add hi + lo first
-   * (exact), then saturate once. */
-  return canfdi_add_s64_sat(hi, hi + lo);
+  int64_t y;
+#if defined(__ARM_ARCH_6M__)
+  if ((ah >= -16777216) && (ah < 16777216)) {
+    /* -2^56 <= a < 2^56 */
+    y = canfdi_mul_s56_q31_rnd_h16(a, b);
+  } else
+#endif
+  {
+    const uint32_t al = (uint32_t)((uint64_t)a & 0xFFFFFFFFU);     /* in [0, 2^32) */
+    const int64_t hi = canfdi_smull32(ah, b);                      /* |hi| <= 2^62 */
+    const int64_t lo = canfdi_asr64_rnd(canfdi_usmull32(al, b), 31U); /* |lo| <= 2^32 */
+    /* 2*hi may overflow on its own while 2*hi + lo does not: add hi + lo
+     * first (exact), then saturate once. */
+    y = canfdi_add_s64_sat(hi, hi + lo);
+  }
+  return y;
 }
 
 /* ------------------------------------------------------------------------ */

@@ -1114,7 +1114,7 @@ START_TEST(test_mul_s56_q31_halves)
 {
   static const int64_t ae[] = {0, 1, -1, 2, -2, 0x7FFFFFFF, -0x80000000LL, 0xFFFFFFFFLL, 0x100000000LL, -0x100000000LL,
                                ((int64_t)1 << 56) - 1, -(((int64_t)1 << 56) - 1), ((int64_t)1 << 40) + 12345,
-                               -((int64_t)1 << 47)};
+                               -((int64_t)1 << 47), -((int64_t)1 << 56)};
   static const int32_t ge[] = {0, 1, -1, 2, INT32_MAX, INT32_MIN, INT32_MIN + 1, 0x40000000, -0x40000000, 0x12345678,
                                -0x12345678, 0xFFFF, 0x10000};
   uint32_t s = 0x9E3779B9U;
