@@ -562,13 +562,13 @@ static inline canfdi_q31_t canfdi_q31_sub(canfdi_q31_t a, canfdi_q31_t b)
  * Scaling and overflow: Q31 -> Q31, saturates; no wider type needed.
  * Cost: a compare and a negate.
  */
-static CANFDI_ALWAYS_INLINE canfdi_q31_t canfdi_q31_neg(canfdi_q31_t a)
+static inline canfdi_q31_t canfdi_q31_neg(canfdi_q31_t a)
 {
   return (a == INT32_MIN) ? INT32_MAX : -a;
 }
 
 /* sat(|a|) in Q31: |-1.0| saturates to CANFDI_Q31_MAX. Cost: two compares. */
-static CANFDI_ALWAYS_INLINE canfdi_q31_t canfdi_q31_abs(canfdi_q31_t a)
+static inline canfdi_q31_t canfdi_q31_abs(canfdi_q31_t a)
 {
   return (a < 0) ? canfdi_q31_neg(a) : a;
 }
