@@ -13,9 +13,9 @@
 #define SVF_PQ_LIMIT (1U << 20)
 /* Normalised states beyond +-2^47 (2^15 units in Q31.32) saturate every
  * output because wc >= 1; clamping there keeps x * wc inside int64_t. */
-#define SVF_V_CLAMP ((int64_t)1 << 47)
-/* The normalised states' bound (canfdi_svf_step): never reached. */
-#define SVF_V_BOUND ((int64_t)1 << 50)
+#define SVF_V_CLAMP_LOG2 47U
+/* The normalised states' bound, 2^50 (canfdi_svf_step): never reached. */
+#define SVF_V_BOUND_LOG2 50U
 
 static uint64_t svf_gcd_u64(uint64_t a, uint64_t b)
 {
@@ -150,33 +150,47 @@ static inline __attribute__((always_inline)) int64_t svf_mul_q31(int64_t a, int3
 #endif
 }
 
-/* x limited to +-SVF_V_BOUND (see svf_state_add). */
-static inline int64_t svf_bound(int64_t x)
+/* x clipped to [-2^e, 2^e], e in 32..62. x lies in [-2^e, 2^e) exactly
+ * when its high word lies in [-2^(e-32), 2^(e-32)): one add and one
+ * compare of a word decide the common case, where two 64-bit compares
+ * take six instructions (some sixty clips a step); the rest is compared
+ * in full. */
+static inline __attribute__((always_inline)) int64_t svf_clip(int64_t x, unsigned e)
 {
+  const int64_t b = (int64_t)1 << e;
+  const uint32_t hi = (uint32_t)((uint64_t)x >> 32);
+  const uint32_t h = (uint32_t)1 << (e - 32U);
   int64_t y = x;
-  if (y > SVF_V_BOUND) {
-    y = SVF_V_BOUND;
-  } else if (y < -SVF_V_BOUND) {
-    y = -SVF_V_BOUND;
-  } else {
-    /* in range: always, see the header */
+  if ((hi + h) >= (2U * h)) {
+    y = (x > b) ? b : ((x < -b) ? -b : x);
   }
   return y;
+}
+
+/* x limited to +-2^50 (see svf_state_add): in range always (see the
+ * header). */
+static inline int64_t svf_bound(int64_t x)
+{
+  return svf_clip(x, SVF_V_BOUND_LOG2);
 }
 
 /*
  * The Q16.16 value of wc^k v (v normalised Q31.32, k = 0, 1, 2), rounded
  * half up and saturated (counted in *sat). Scaling and overflow: v is
- * clamped to +-2^47 (SVF_V_CLAMP: beyond it every output saturates, as
+ * clamped to +-2^47 (SVF_V_CLAMP_LOG2: beyond it every output saturates, as
  * wc >= 1) before each multiply by wc < 2^15, so every product stays below
  * 2^62. One function per k: a loop over a run-time k costs more than the
  * work.
  */
 static inline __attribute__((always_inline)) int32_t svf_out_k0(int64_t v, uint32_t *sat)
 {
-  const int64_t x = canfdi_asr64_rnd(v, 16U);
-  const int32_t y = canfdi_sat_s64_to_s32(x);
-  if ((int64_t)y != x) {
+  /* canfdi_sat_s64_to_s32 with its range test kept for the count */
+  const uint64_t u = (uint64_t)canfdi_asr64_rnd(v, 16U);
+  const uint32_t lo = (uint32_t)u;
+  const uint32_t hi = (uint32_t)(u >> 32);
+  int32_t y = canfdi_wrap_u32_to_s32(lo);
+  if (hi != (0U - (lo >> 31))) {
+    y = ((hi >> 31) != 0U) ? INT32_MIN : INT32_MAX;
     canfdi_count_inc(sat);
   }
   return y;
@@ -196,15 +210,12 @@ static inline __attribute__((always_inline)) int64_t svf_mul_wc(int64_t c, int32
 
 static inline int32_t svf_out_k1(int64_t v, int32_t wc, uint32_t *sat)
 {
-  const int64_t c = (v > SVF_V_CLAMP) ? SVF_V_CLAMP : ((v < -SVF_V_CLAMP) ? -SVF_V_CLAMP : v);
-  return svf_out_k0(svf_mul_wc(c, wc), sat);
+  return svf_out_k0(svf_mul_wc(svf_clip(v, SVF_V_CLAMP_LOG2), wc), sat);
 }
 
 static inline int32_t svf_out_k2(int64_t v, int32_t wc, uint32_t *sat)
 {
-  const int64_t c = (v > SVF_V_CLAMP) ? SVF_V_CLAMP : ((v < -SVF_V_CLAMP) ? -SVF_V_CLAMP : v);
-  int64_t x = svf_mul_wc(c, wc);
-  x = (x > SVF_V_CLAMP) ? SVF_V_CLAMP : ((x < -SVF_V_CLAMP) ? -SVF_V_CLAMP : x);
+  const int64_t x = svf_clip(svf_mul_wc(svf_clip(v, SVF_V_CLAMP_LOG2), wc), SVF_V_CLAMP_LOG2);
   return svf_out_k0(svf_mul_wc(x, wc), sat);
 }
 
