@@ -262,8 +262,9 @@ static int32_t xf_to_s32(xf_t a, int32_t frac)
     if (sh >= 0) {
       y = canfdi_shl32_sat(a.m, (unsigned)((sh > 31) ? 31 : sh));
     } else {
-      const unsigned k = (unsigned)((-sh > 31) ? 31 : -sh);
-      y = canfdi_asr32(a.m, k) + (int32_t)(((uint32_t)a.m >> (k - 1U)) & 1U);
+      /* the shift less one: 0..30 (sh < 0 here) */
+      const unsigned k1 = (-sh > 31) ? 30U : ((-sh < 1) ? 0U : (unsigned)(-sh - 1));
+      y = canfdi_asr32(a.m, k1 + 1U) + (int32_t)(((uint32_t)a.m >> k1) & 1U);
     }
   }
   return y;

@@ -184,13 +184,15 @@ static inline int64_t svf_bound(int64_t x)
  */
 static inline __attribute__((always_inline)) int32_t svf_out_k0(int64_t v, uint32_t *sat)
 {
-  /* canfdi_sat_s64_to_s32 with its range test kept for the count */
-  const uint64_t u = (uint64_t)canfdi_asr64_rnd(v, 16U);
+  /* saturated when x does not fit 32 bits: its high word is not the sign
+   * extension of its low word (canfdi_sat_s64_to_s32's own test, which
+   * the compiler shares; a 64-bit compare of y with x costs more) */
+  const int64_t x = canfdi_asr64_rnd(v, 16U);
+  const uint64_t u = (uint64_t)x;
   const uint32_t lo = (uint32_t)u;
   const uint32_t hi = (uint32_t)(u >> 32);
-  int32_t y = canfdi_wrap_u32_to_s32(lo);
+  const int32_t y = canfdi_sat_s64_to_s32(x);
   if (hi != (0U - (lo >> 31))) {
-    y = ((hi >> 31) != 0U) ? INT32_MIN : INT32_MAX;
     canfdi_count_inc(sat);
   }
   return y;
