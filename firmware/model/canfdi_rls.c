@@ -991,8 +991,27 @@ int32_t canfdi_rls_theta_qn(const canfdi_rls_t *r, unsigned i, unsigned frac)
   int32_t y = 0;
   CANFDI_ASSERT(r != NULL);
   if ((i < r->cfg.n_params) && (frac <= 31U)) {
-    const xf_t t = xf_make32(r->theta[i], r->theta_e + (int32_t)r->cfg.y_shift - (int32_t)r->cfg.phi_shift[i]);
-    y = xf_to_s32(t, (int32_t)frac);
+    const int32_t x = r->theta[i];
+    const int32_t e = (r->theta_e + (int32_t)r->cfg.y_shift) - (int32_t)r->cfg.phi_shift[i];
+    if (mag32(x) > (uint32_t)BLK_MAX) {
+      /* beyond the block's bound (canfdi_rls_invariants_hold: never):
+       * normalised first, rounded to 30 bits */
+      y = xf_to_s32(xf_make32(x, e), (int32_t)frac);
+    } else if (x != 0) {
+      /* |x| <= 2^30: xf_make32 would normalise x 2^e exactly, so x 2^t
+       * rounded (half up) or saturated here is the same value; it runs
+       * several times a step */
+      const int32_t t = e + (int32_t)frac;
+      if (t >= 0) {
+        y = canfdi_shl32_sat(x, (unsigned)((t > 31) ? 31 : t));
+      } else if (t >= -31) {
+        y = asr_rnd(x, (unsigned)-t);
+      } else {
+        /* |x 2^t| <= 1/4: rounds to 0 */
+      }
+    } else {
+      /* 0 */
+    }
   }
   return y;
 }

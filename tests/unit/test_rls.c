@@ -900,6 +900,60 @@ START_TEST(test_readout)
 }
 END_TEST
 
+static uint64_t rng_bits(void)
+{
+  (void)rng_u();
+  return rng_s;
+}
+
+/* round(x 2^t), half up, saturated to int32_t, for |x| <= 2^31: the
+ * read-out's contract, in 64-bit arithmetic. */
+static int32_t ref_round_sat(int32_t x, int32_t t)
+{
+  int64_t v;
+  if (t >= 0) {
+    v = (t > 32) ? ((x > 0) ? INT64_MAX : ((x < 0) ? INT64_MIN : 0)) : (int64_t)x * ((int64_t)1 << t);
+  } else if (t >= -40) {
+    v = (int64_t)floor(((double)x / ldexp(1.0, -t)) + 0.5); /* exact: |x| < 2^31, a power of two */
+  } else {
+    v = 0;
+  }
+  return (v > INT32_MAX) ? INT32_MAX : ((v < INT32_MIN) ? INT32_MIN : (int32_t)v);
+}
+
+/* The theta read-out on every block value's size, exponent and requested
+ * format: the rounded (half up) and saturated value of theta_i 2^e, with
+ * e the block exponent and the shifts; also at the block's edges +-2^30. */
+START_TEST(test_readout_rounding)
+{
+  canfdi_rls_cfg_t c;
+  canfdi_rls_t r;
+  unsigned k;
+  base_cfg(&c, 2);
+  c.y_shift = 3;
+  c.phi_shift[1] = -5;
+  ck_assert_int_eq(canfdi_rls_init(&r, &c), CANFDI_OK);
+  rng_seed(77U);
+  for (k = 0U; k < 200000U; k++) {
+    const unsigned bits = k % 31U;
+    int32_t x = (bits == 0U) ? 0 : (int32_t)(rng_bits() >> (64U - bits)); /* 0 .. 2^bits - 1 */
+    const unsigned frac = (unsigned)(rng_bits() % 32U);
+    const unsigned i = k & 1U;
+    int32_t e;
+    if ((k & 2U) != 0U) {
+      x = -x;
+    }
+    if (k % 97U == 0U) {
+      x = ((k & 4U) != 0U) ? (1 << 30) : -(1 << 30);
+    }
+    r.theta[i] = x;
+    r.theta_e = (int32_t)(rng_bits() % 120U) - 80;
+    e = (r.theta_e + (int32_t)c.y_shift) - (int32_t)c.phi_shift[i];
+    ck_assert_int_eq(canfdi_rls_theta_qn(&r, i, frac), ref_round_sat(x, e + (int32_t)frac));
+  }
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("rls");
@@ -908,6 +962,7 @@ static Suite *make_suite(void)
   tc = tcase_create("config");
   tcase_add_loop_test(tc, test_cfg_domain, 0, (int)(sizeof cfg_cases / sizeof cfg_cases[0]));
   tcase_add_test(tc, test_readout);
+  tcase_add_test(tc, test_readout_rounding);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("accuracy");
