@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      19 923   21 834   28 123
- *   Cortex-M4 (an386)      19 899   21 803   28 095
- *   Cortex-M0 (microbit)   39 580   44 821   57 027
- * and at most 28 863 (M4) / 60 297 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      18 676   20 422   26 691
+ *   Cortex-M4 (an386)      18 677   20 425   26 699
+ *   Cortex-M0 (microbit)   36 687   41 579   53 856
+ * and at most 27 400 (M4) / 56 795 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -124,16 +124,16 @@
  * (tests/pil/pil_profile.py; its split is summarised in
  * docs/requirements.md, requirement 1). A 1 ms step needs a Cortex-M4 of
  * roughly 40 MHz or more with margin (the worst step at ~1.2 cycles per
- * instruction: 35 MHz for the whole millisecond); on a Cortex-M0 at
+ * instruction: 33 MHz for the whole millisecond); on a Cortex-M0 at
  * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
- * halves, core/canfdi_fixp.h, and runs ~2.1 times the M4's count).
+ * halves, core/canfdi_fixp.h, and runs ~2.0 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 25 900 (M4) / 52 500
- * (M0) in those steps, within the same run's maxima (27 800 / 56 100).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 24 500 (M4) / 49 500
+ * (M0) in those steps, within the same run's maxima (26 400 / 52 900).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 28 863 / 60 297,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 27 400 / 56 795,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less

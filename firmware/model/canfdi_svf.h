@@ -73,15 +73,15 @@
  *
  * Cost per canfdi_svf_step (n = order): 2n - 1 rounded products of a
  * 64-bit state difference and a Q31 gain (3 or 5; each a SMULL and a UMULL
- * on ARMv7-M, their 16-bit halves on ARMv6-M), plain 64-bit sums under the
- * state bound of canfdi_svf.c, and per output computed (cfg.outputs) a
- * rounding with up to two 64-bit products by wc (none for y, one for dy,
- * two for d2y). Measured executed instructions per call in the
- * application (`make bench-pil-profile`, dcm_ia_offset: the eleven
- * order-3 and four order-2 filters with their output sets, wc 100-300):
- * ~260 on the Cortex-M4, ~700 on the Cortex-M0 (the n^2 form took ~330
- * and ~1 000: `make pil-test`'s step means fell by 1 050 and 4 600 per
- * 15 filters).
+ * on ARMv7-M, one call that builds both from 16-bit halves on ARMv6-M),
+ * plain 64-bit sums under the state bound of canfdi_svf.c (its clips
+ * decided on the high word), and per output computed (cfg.outputs) a
+ * rounding with up to two products by wc (none for y, one for dy, two for
+ * d2y; on ARMv6-M three 32-bit multiplies each). Measured executed
+ * instructions per call in the application (`make bench-pil-profile`,
+ * dcm_ia_offset: the eleven order-3 and four order-2 filters with their
+ * output sets, wc 100-300): ~190 on the Cortex-M4, ~450 on the Cortex-M0
+ * with its products' calls.
  * canfdi_svf_init: a gcd (64-bit modulo, a few iterations) and n + 1
  * 31-step long divisions, < 10 k instructions; not for the 1 ms path.
  * Memory: sizeof(canfdi_svf_t) = 80 bytes on a 32-bit target, caller-owned.
