@@ -630,9 +630,10 @@ static inline int32_t canfdi_mul_s32_qn(int32_t a, int32_t b, unsigned n)
  * INT64_MIN/MAX (only when |a| is near 2^63 and |b| near 1).
  * Rounding: half up. Cost: two 32x32->64 multiplies (M4: SMULL + a signed x
  * unsigned 64-bit product; M0+: their 16-bit halves), constant shifts, two
- * 64-bit adds with saturation checks. On ARMv6-M an a within 2^56 (every
- * filter state of the firmware) takes canfdi_mul_s56_q31_rnd_h16 instead:
- * one call for three, the same bits (no saturation can act there).
+ * 64-bit adds with saturation checks. On ARMv6-M an a within 2^56 (the
+ * filter states of the firmware, with few exceptions) takes
+ * canfdi_mul_s56_q31_rnd_h16 instead: one call for two, the same bits (no
+ * saturation can act there).
  */
 static inline int64_t canfdi_mul_s64_q31(int64_t a, canfdi_q31_t b)
 {

@@ -197,7 +197,8 @@ static xf_t xf_make(int64_t v, int32_t e)
 }
 
 /* xf_make for a 32-bit v: the same m and e (exact up to 2^30 in
- * magnitude, rounded half up above), from one 32-bit CLZ instead of the
+ * magnitude, above rounded half up on the magnitude, as xf_make), from
+ * one 32-bit CLZ instead of the
  * 64-bit normalisation. The read-out of theta, several times a step. */
 static xf_t xf_make32(int32_t v, int32_t e)
 {

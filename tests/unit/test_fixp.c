@@ -1150,14 +1150,15 @@ START_TEST(test_mul_s56_q31_halves)
     s ^= s >> 17;
     s ^= s << 5;
     a |= s;
-    /* a size of 0..56 bits, either sign */
+    /* a size of 1..56 bits, either sign (the signs of a and g vary
+     * independently of the size) */
     av = (int64_t)(a >> (8U + (k % 56U)));
-    av = ((k & 1U) != 0U) ? -av : av;
+    av = (((k / 56U) & 1U) != 0U) ? -av : av;
     s ^= s << 13;
     s ^= s >> 17;
     s ^= s << 5;
     g = canfdi_wrap_u32_to_s32(s >> ((k / 57U) % 32U));
-    g = (((k & 2U) != 0U) && (g != INT32_MIN)) ? -g : g;
+    g = ((((k / 112U) & 1U) != 0U) && (g != INT32_MIN)) ? -g : g;
     ck_assert(canfdi_mul_s56_q31_rnd_h16(av, g) == ref_mul_s56_q31_rnd(av, g));
     {
       /* the same operands cut to |c| <= 2^47, w < 2^15 */

@@ -908,11 +908,11 @@ static uint64_t rng_bits(void)
 
 /* round(x 2^t), half up, saturated to int32_t, for |x| <= 2^31: the
  * read-out's contract, in 64-bit arithmetic. */
-static int32_t ref_round_sat(int32_t x, int32_t t)
+static int32_t ref_round_sat(int64_t x, int32_t t)
 {
   int64_t v;
   if (t >= 0) {
-    v = (t > 32) ? ((x > 0) ? INT64_MAX : ((x < 0) ? INT64_MIN : 0)) : (int64_t)x * ((int64_t)1 << t);
+    v = (t > 31) ? ((x > 0) ? INT64_MAX : ((x < 0) ? INT64_MIN : 0)) : x * ((int64_t)1 << t);
   } else if (t >= -40) {
     v = (int64_t)floor(((double)x / ldexp(1.0, -t)) + 0.5); /* exact: |x| < 2^31, a power of two */
   } else {
@@ -923,7 +923,10 @@ static int32_t ref_round_sat(int32_t x, int32_t t)
 
 /* The theta read-out on every block value's size, exponent and requested
  * format: the rounded (half up) and saturated value of theta_i 2^e, with
- * e the block exponent and the shifts; also at the block's edges +-2^30. */
+ * e the block exponent and the shifts; also at the block's edges +-2^30.
+ * Beyond them (never in a running estimator) the value is first rounded
+ * to 30 bits, half up on the magnitude: an odd magnitude in (2^30, 2^31)
+ * moves up by one unit. */
 START_TEST(test_readout_rounding)
 {
   canfdi_rls_cfg_t c;
@@ -950,6 +953,14 @@ START_TEST(test_readout_rounding)
     r.theta_e = (int32_t)(rng_bits() % 120U) - 80;
     e = (r.theta_e + (int32_t)c.y_shift) - (int32_t)c.phi_shift[i];
     ck_assert_int_eq(canfdi_rls_theta_qn(&r, i, frac), ref_round_sat(x, e + (int32_t)frac));
+    if (k % 89U == 0U) {
+      /* beyond the bound: |x| in (2^30, 2^31], either sign */
+      const uint32_t mag = (k % 178U == 0U) ? 0x80000000U : (0x40000001U + (uint32_t)(rng_bits() % 0x3FFFFFFFU));
+      const int64_t v = (int64_t)mag + (int64_t)(mag & 1U);
+      const bool neg = (mag == 0x80000000U) || ((k & 2U) != 0U);
+      r.theta[i] = neg ? (int32_t)(-(int64_t)mag) : (int32_t)mag;
+      ck_assert_int_eq(canfdi_rls_theta_qn(&r, i, frac), ref_round_sat(neg ? -v : v, e + (int32_t)frac));
+    }
   }
 }
 END_TEST
