@@ -368,24 +368,32 @@ static inline int16_t canfdi_sat_s32_to_s16(int32_t x)
 }
 
 /*
+ * Whether x lies in [INT32_MIN, INT32_MAX]: exactly when its high word is
+ * the sign extension of its low word. One compare of the two words (CMP
+ * with an ASR #31 operand on ARMv7-M), where two 64-bit compares take six
+ * instructions; canfdi_sat_s64_to_s32 runs about a hundred times a step.
+ * Scaling and overflow: none (a test; no arithmetic that wraps).
+ */
+static inline bool canfdi_s64_fits_s32(int64_t x)
+{
+  const uint64_t u = (uint64_t)x;
+  return canfdi_wrap_u32_to_s32((uint32_t)(u >> 32)) == canfdi_asr32(canfdi_wrap_u32_to_s32((uint32_t)u), 31U);
+}
+
+/*
  * x clipped to [INT32_MIN, INT32_MAX] (clip_q63_to_q31 in CMSIS terms).
- * Scaling and overflow: keeps the scaling; saturates. x fits 32 bits
- * exactly when its high word is the sign extension of its low word: one
- * compare of the two words (CMP with an ASR #31 operand on ARMv7-M), where
- * two 64-bit compares take six instructions; it runs about a hundred times
- * a step. Out of range, the high word's sign picks the bound.
+ * Scaling and overflow: keeps the scaling; saturates. In range by
+ * canfdi_s64_fits_s32; out of range, the sign of x picks the bound.
  * Cost: one compare and a branch (in range).
  */
 static inline int32_t canfdi_sat_s64_to_s32(int64_t x)
 {
   const uint64_t u = (uint64_t)x;
-  const uint32_t lo = (uint32_t)u;
-  const uint32_t hi = (uint32_t)(u >> 32);
   int32_t y;
-  if (hi == (0U - (lo >> 31))) {
-    y = canfdi_wrap_u32_to_s32(lo);
+  if (canfdi_s64_fits_s32(x)) {
+    y = canfdi_wrap_u32_to_s32((uint32_t)u);
   } else {
-    y = ((hi >> 31) != 0U) ? INT32_MIN : INT32_MAX;
+    y = ((u >> 63) != 0U) ? INT32_MIN : INT32_MAX;
   }
   return y;
 }

@@ -196,32 +196,6 @@ static xf_t xf_make(int64_t v, int32_t e)
   return r;
 }
 
-/* xf_make for a 32-bit v: the same m and e (exact up to 2^30 in
- * magnitude, above rounded half up on the magnitude, as xf_make), from
- * one 32-bit CLZ instead of the
- * 64-bit normalisation. The read-out of theta, several times a step. */
-static xf_t xf_make32(int32_t v, int32_t e)
-{
-  xf_t r = {0, 0};
-  if (v != 0) {
-    const uint32_t mag = (v < 0) ? (0U - (uint32_t)v) : (uint32_t)v;
-    const int32_t len = 32 - (int32_t)canfdi_clz32(mag); /* mag < 2^len */
-    uint32_t m;
-    r.e = (e + len) - 30;
-    if (len <= 30) {
-      m = mag << (unsigned)(30 - len);
-    } else {
-      m = (mag >> (unsigned)(len - 30)) + ((mag >> (unsigned)(len - 31)) & 1U);
-      if (m == 0x40000000U) {
-        m = 0x20000000U;
-        r.e += 1;
-      }
-    }
-    r.m = (v < 0) ? -(int32_t)m : (int32_t)m;
-  }
-  return r;
-}
-
 static xf_t xf_mul(xf_t a, xf_t b)
 {
   return xf_make((int64_t)a.m * (int64_t)b.m, a.e + b.e);
@@ -292,6 +266,32 @@ static unsigned u_idx(unsigned i, unsigned j)
 static uint32_t mag32(int32_t x)
 {
   return (x < 0) ? (0U - (uint32_t)x) : (uint32_t)x;
+}
+
+/* xf_make for a 32-bit v: the same m and e (exact up to 2^30 in
+ * magnitude, above rounded half up on the magnitude, as xf_make), from
+ * one 32-bit CLZ instead of the 64-bit normalisation: the read-out of a
+ * theta beyond the block's bound. */
+static xf_t xf_make32(int32_t v, int32_t e)
+{
+  xf_t r = {0, 0};
+  if (v != 0) {
+    const uint32_t mag = mag32(v);
+    const int32_t len = 32 - (int32_t)canfdi_clz32(mag); /* mag < 2^len */
+    uint32_t m;
+    r.e = (e + len) - 30;
+    if (len <= 30) {
+      m = mag << (unsigned)(30 - len);
+    } else {
+      m = (mag >> (unsigned)(len - 30)) + ((mag >> (unsigned)(len - 31)) & 1U);
+      if (m == 0x40000000U) {
+        m = 0x20000000U;
+        r.e += 1;
+      }
+    }
+    r.m = (v < 0) ? -(int32_t)m : (int32_t)m;
+  }
+  return r;
 }
 
 /* |x| for x >= 0 and |x| - 1 for x < 0: the bits a block's OR needs (a

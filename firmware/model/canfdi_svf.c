@@ -151,17 +151,17 @@ static inline __attribute__((always_inline)) int64_t svf_mul_q31(int64_t a, int3
 }
 
 /* x clipped to [-2^e, 2^e], e in 32..62. x lies in [-2^e, 2^e) exactly
- * when its high word lies in [-2^(e-32), 2^(e-32)): one add and one
- * compare of a word decide the common case, where two 64-bit compares
- * take six instructions (some sixty clips a step); the rest is compared
- * in full. */
+ * when its high word (signed) lies in [-2^(e-32), 2^(e-32)): a range test
+ * of one word (the compiler makes it one add and one compare) decides the
+ * common case, where two 64-bit compares take six instructions (some
+ * sixty clips a step); the rest is compared in full. */
 static inline __attribute__((always_inline)) int64_t svf_clip(int64_t x, unsigned e)
 {
   const int64_t b = (int64_t)1 << e;
-  const uint32_t hi = (uint32_t)((uint64_t)x >> 32);
-  const uint32_t h = (uint32_t)1 << (e - 32U);
+  const int32_t hi = canfdi_wrap_u32_to_s32((uint32_t)((uint64_t)x >> 32));
+  const int32_t h = (int32_t)1 << (e - 32U);
   int64_t y = x;
-  if ((hi + h) >= (2U * h)) {
+  if ((hi < -h) || (hi >= h)) {
     y = (x > b) ? b : ((x < -b) ? -b : x);
   }
   return y;
@@ -184,15 +184,12 @@ static inline int64_t svf_bound(int64_t x)
  */
 static inline __attribute__((always_inline)) int32_t svf_out_k0(int64_t v, uint32_t *sat)
 {
-  /* saturated when x does not fit 32 bits: its high word is not the sign
-   * extension of its low word (canfdi_sat_s64_to_s32's own test, which
-   * the compiler shares; a 64-bit compare of y with x costs more) */
+  /* saturated when x does not fit 32 bits (canfdi_sat_s64_to_s32's own
+   * test, which the compiler shares; a 64-bit compare of y with x costs
+   * more) */
   const int64_t x = canfdi_asr64_rnd(v, 16U);
-  const uint64_t u = (uint64_t)x;
-  const uint32_t lo = (uint32_t)u;
-  const uint32_t hi = (uint32_t)(u >> 32);
   const int32_t y = canfdi_sat_s64_to_s32(x);
-  if (hi != (0U - (lo >> 31))) {
+  if (!canfdi_s64_fits_s32(x)) {
     canfdi_count_inc(sat);
   }
   return y;

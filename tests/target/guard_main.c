@@ -106,6 +106,7 @@ static void guard_fixp(void)
   sink64(canfdi_usmull32_h16(in_u32, b));
   sink64(canfdi_mul_s56_q31_rnd_h16(in_s64[0] / 256, b));
   sink64(canfdi_mul_s48_u15_h16(in_s64[1] / 65536, b & 0x7FFF));
+  sink32(canfdi_s64_fits_s32(in_s64[0]) ? 1 : 0);
   sink32(canfdi_clamp_s32(a, b, c));
   sink32(canfdi_asr32(a, n));
   sink64(canfdi_asr64(a64, n));

@@ -362,9 +362,12 @@ START_TEST(test_sat_width)
     const int64_t b = rnd_s64();
     EXPECT(canfdi_sat_s32_to_s16(a) == ref_sat16(a), "sat16(%ld)", (long)a);
     EXPECT(canfdi_sat_s64_to_s32(b) == ref_sat32(b), "sat32(%lld)", (long long)b);
+    EXPECT(canfdi_s64_fits_s32(b) == ((b >= INT32_MIN) && (b <= INT32_MAX)), "fits32(%lld)", (long long)b);
   }
   for (k = 0U; k < N_EDGE64; k++) {
     EXPECT(canfdi_sat_s64_to_s32(EDGE64[k]) == ref_sat32(EDGE64[k]), "sat32 edge %u", k);
+    EXPECT(canfdi_s64_fits_s32(EDGE64[k]) == ((EDGE64[k] >= INT32_MIN) && (EDGE64[k] <= INT32_MAX)), "fits32 edge %u",
+           k);
   }
   DONE();
 }
