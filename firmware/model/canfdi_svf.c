@@ -169,7 +169,7 @@ static inline __attribute__((always_inline)) int64_t svf_clip(int64_t x, unsigne
 
 /* x limited to +-2^50 (see svf_state_add): in range always (see the
  * header). */
-static inline int64_t svf_bound(int64_t x)
+static inline __attribute__((always_inline)) int64_t svf_bound(int64_t x)
 {
   return svf_clip(x, SVF_V_BOUND_LOG2);
 }
