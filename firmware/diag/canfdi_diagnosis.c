@@ -14,6 +14,7 @@
 /* The rule tables are generated from dbc/diag_rules.csv
  * (diag/gen/canfdi_diag_rules.c). */
 CANFDI_STATIC_ASSERT(CANFDI_FAULT_COUNT <= 32U, fault_ids_fit_the_mask);
+CANFDI_STATIC_ASSERT((CANFDI_FAULT_COUNT % 4U) == 0U, report_written_four_at_a_time);
 CANFDI_STATIC_ASSERT(CANFDI_DIAG_N_FLAGS <= 16U, flags_fit_uint16);
 CANFDI_STATIC_ASSERT((CANFDI_DIAG_REPORT_FAILED == 1) && (CANFDI_DIAG_REPORT_PASSED == -1) &&
                          (CANFDI_DIAG_REPORT_NONE == 0),
@@ -918,9 +919,18 @@ static void report_phase(canfdi_diagnosis_t *d, const verdicts_t *v, int8_t repo
   uint32_t i;
   d->failed_mask = failed;
   if (report != NULL) {
-    /* FAILED 1, PASSED -1, NONE 0; the two masks are disjoint */
-    for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-      report[i] = (int8_t)((int32_t)((failed >> i) & 1U) - (int32_t)((passed >> i) & 1U));
+    /* FAILED 1, PASSED -1, NONE 0; the two masks are disjoint. Four
+     * faults an iteration from masks shifted as they go: every step, and
+     * a bit test per fault costs twice as much. */
+    uint32_t f = failed;
+    uint32_t p = passed;
+    for (i = 0U; i < CANFDI_FAULT_COUNT; i += 4U) {
+      report[i] = (int8_t)((int32_t)(f & 1U) - (int32_t)(p & 1U));
+      report[i + 1U] = (int8_t)((int32_t)((f >> 1) & 1U) - (int32_t)((p >> 1) & 1U));
+      report[i + 2U] = (int8_t)((int32_t)((f >> 2) & 1U) - (int32_t)((p >> 2) & 1U));
+      report[i + 3U] = (int8_t)((int32_t)((f >> 3) & 1U) - (int32_t)((p >> 3) & 1U));
+      f >>= 4;
+      p >>= 4;
     }
   }
 }
