@@ -225,10 +225,7 @@ static xf_t xf_from_pf(pf_t a, bool neg)
   return xf_make(neg ? -v : v, a.e - 32);
 }
 
-/* round(a 2^frac) (half up), saturated to int32_t. The rounding shift is
- * written out (canfdi_asr32_rnd's two terms): a call would cost as much,
- * several times a step. Its count is clamped to 31: with |a.m| < 2^30 any
- * larger one gives 0 alike. */
+/* round(a 2^frac), saturated to int32_t. */
 static int32_t xf_to_s32(xf_t a, int32_t frac)
 {
   const int32_t sh = a.e + frac;
@@ -237,9 +234,7 @@ static int32_t xf_to_s32(xf_t a, int32_t frac)
     if (sh >= 0) {
       y = canfdi_shl32_sat(a.m, (unsigned)((sh > 31) ? 31 : sh));
     } else {
-      /* the shift less one: 0..30 (sh < 0 here) */
-      const unsigned k1 = (-sh > 31) ? 30U : ((-sh < 1) ? 0U : (unsigned)(-sh - 1));
-      y = canfdi_asr32(a.m, k1 + 1U) + (int32_t)(((uint32_t)a.m >> k1) & 1U);
+      y = canfdi_asr32_rnd(a.m, (unsigned)((-sh > 32) ? 32 : -sh));
     }
   }
   return y;
@@ -266,32 +261,6 @@ static unsigned u_idx(unsigned i, unsigned j)
 static uint32_t mag32(int32_t x)
 {
   return (x < 0) ? (0U - (uint32_t)x) : (uint32_t)x;
-}
-
-/* xf_make for a 32-bit v: the same m and e (exact up to 2^30 in
- * magnitude, above rounded half up on the magnitude, as xf_make), from
- * one 32-bit CLZ instead of the 64-bit normalisation: the read-out of a
- * theta beyond the block's bound. */
-static xf_t xf_make32(int32_t v, int32_t e)
-{
-  xf_t r = {0, 0};
-  if (v != 0) {
-    const uint32_t mag = mag32(v);
-    const int32_t len = 32 - (int32_t)canfdi_clz32(mag); /* mag < 2^len */
-    uint32_t m;
-    r.e = (e + len) - 30;
-    if (len <= 30) {
-      m = mag << (unsigned)(30 - len);
-    } else {
-      m = (mag >> (unsigned)(len - 30)) + ((mag >> (unsigned)(len - 31)) & 1U);
-      if (m == 0x40000000U) {
-        m = 0x20000000U;
-        r.e += 1;
-      }
-    }
-    r.m = (v < 0) ? -(int32_t)m : (int32_t)m;
-  }
-  return r;
 }
 
 /* |x| for x >= 0 and |x| - 1 for x < 0: the bits a block's OR needs (a
@@ -997,9 +966,9 @@ int32_t canfdi_rls_theta_qn(const canfdi_rls_t *r, unsigned i, unsigned frac)
     if (mag32(x) > (uint32_t)BLK_MAX) {
       /* beyond the block's bound (canfdi_rls_invariants_hold: never):
        * normalised first, rounded to 30 bits */
-      y = xf_to_s32(xf_make32(x, e), (int32_t)frac);
+      y = xf_to_s32(xf_make(x, e), (int32_t)frac);
     } else if (x != 0) {
-      /* |x| <= 2^30: xf_make32 would normalise x 2^e exactly, so x 2^t
+      /* |x| <= 2^30: xf_make would normalise x 2^e exactly, so x 2^t
        * rounded (half up) or saturated here is the same value; it runs
        * several times a step */
       const int32_t t = e + (int32_t)frac;
