@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      18 538   20 288   26 557
- *   Cortex-M4 (an386)      18 539   20 291   26 565
- *   Cortex-M0 (microbit)   36 516   41 406   53 683
- * and at most 27 268 (M4) / 56 622 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      18 548   20 297   26 566
+ *   Cortex-M4 (an386)      18 548   20 300   26 574
+ *   Cortex-M0 (microbit)   36 534   41 424   53 699
+ * and at most 27 276 (M4) / 56 639 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -133,7 +133,7 @@
  * of tests/sil/scenarios/uds_workshop.scn): at most 24 400 (M4) / 49 300
  * (M0) in those steps, within the same run's maxima (26 300 / 52 700).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 27 268 / 56 622,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 27 276 / 56 639,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
