@@ -434,7 +434,8 @@ static void stage_dtc(canfdi_app_t *app)
   ff.supply_q16 = IN_VAL(app, CANFDI_RX_IN_DCM_USUPPLY);
   ff.deg_dcm = app->fb.mgr.dcm_state;
   ff.deg_thr = app->fb.mgr.thr_state;
-  ri.report = app->report;
+  ri.failed = canfdi_diagnosis_failed_mask(&app->diagnosis);
+  ri.passed = canfdi_diagnosis_passed_mask(&app->diagnosis);
   ri.mgr_detected = app->fb.mgr.detected;
   ri.corr_not_isolated = canfdi_diagnosis_corr_not_isolated(&app->diagnosis);
   ri.corr_tested = canfdi_diagnosis_symptom(&app->diagnosis, CANFDI_COMPONENT_THROTTLE,
@@ -455,7 +456,8 @@ static void stage_manage(canfdi_app_t *app, int32_t u_dcm, int32_t u_thr)
   mi.dcm_ua_valid = IN_VALID(app, CANFDI_RX_IN_DCM_UA) && canfdi_rx_fresh(&app->rx, CANFDI_RX_IN_DCM_UA);
   mi.dcm_supply_valid = IN_VALID(app, CANFDI_RX_IN_DCM_USUPPLY);
   mi.thr_u_ctrl_V_q16 = u_thr;
-  mi.faults = canfdi_dtcroute_manager_faults(&app->dtcroute, &app->dtc, app->report);
+  mi.faults = canfdi_dtcroute_manager_faults(&app->dtcroute, &app->dtc, canfdi_diagnosis_failed_mask(&app->diagnosis),
+                                             canfdi_diagnosis_passed_mask(&app->diagnosis));
   mi.fail_silent = false;
   mi.dcm_hold_off = !app->dcm.started;
   mi.thr_hold_off = !app->thr.started || app->uds_act.thr_release; /* the spring check releases */
@@ -555,9 +557,9 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
       /* 6. the full diagnosis in its slot of the rate schedule
        * (canfdi_app.h); the hard rules in every other step, the model
        * rules' verdicts held between full steps */
-      canfdi_diagnosis_step(&app->diagnosis, &app->sym, app->report);
+      canfdi_diagnosis_step(&app->diagnosis, &app->sym, NULL);
     } else {
-      canfdi_diagnosis_step_hard(&app->diagnosis, &app->sym, app->report);
+      canfdi_diagnosis_step_hard(&app->diagnosis, &app->sym, NULL);
     }
     stage_dtc(app);                    /* 7. */
     stage_manage(app, u_dcm, u_thr);   /* 8. */

@@ -155,7 +155,7 @@
  * fault is named up to one period later than unscheduled; the hard rules'
  * faults at the same step.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
- * all of the application's RAM, static: 10 984 bytes on Cortex-M (740 of
+ * all of the application's RAM, static: 10 960 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
  * are `make footprint`'s (11 496 B and 1 968 B on the Cortex-M0). No heap.
@@ -325,7 +325,6 @@ typedef struct {
   canfdi_vote_out_t vote_out;
   canfdi_actmon_out_t actmon_out;
   canfdi_symptoms_t sym;
-  int8_t report[CANFDI_FAULT_COUNT];
   canfdi_app_gate_t dcm;
   canfdi_app_gate_t thr;
   canfdi_app_fb_t fb;   /* of the last step, for this one */

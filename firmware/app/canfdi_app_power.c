@@ -73,14 +73,10 @@ int32_t canfdi_app_init(canfdi_app_t *app, const canfdi_app_cal_t *cal, uint32_t
     app->cal.parity_thr.tps2 = cal->tps2;
     rc = init_modules(app, now_us);
     if (rc == CANFDI_OK) {
-      uint32_t i;
       canfdi_excite_enable(&app->excite_dcm, false);
       canfdi_excite_enable(&app->excite_thr, false);
       canfdi_app_out_init(&app->out, &app->dtc);
       canfdi_uptime_init(&app->uptime, now_us);
-      for (i = 0U; i < CANFDI_FAULT_COUNT; i++) {
-        app->report[i] = CANFDI_DIAG_REPORT_NONE;
-      }
       app->vote_out = (canfdi_vote_out_t){0};
       app->actmon_out = (canfdi_actmon_out_t){0};
       app->sym = (canfdi_symptoms_t){0};

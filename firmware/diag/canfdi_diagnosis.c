@@ -172,6 +172,7 @@ void canfdi_diagnosis_reset(canfdi_diagnosis_t *d)
     d->held[CANFDI_DIAG_COMP_THR] = false;
     d->corr_not_isolated = false;
     d->failed_mask = 0U;
+    d->passed_mask = 0U;
   }
 }
 
@@ -918,6 +919,7 @@ static void report_phase(canfdi_diagnosis_t *d, const verdicts_t *v, int8_t repo
   const uint32_t passed = ((~failed & (~v->h.has | v->h.pass)) & (~v->m.has | v->m.pass)) & (v->h.has | v->m.has);
   uint32_t i;
   d->failed_mask = failed;
+  d->passed_mask = passed;
   if (report != NULL) {
     /* FAILED 1, PASSED -1, NONE 0; the two masks are disjoint. Four
      * faults an iteration from masks shifted as they go: every step, and
@@ -959,6 +961,8 @@ static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
   if ((d == NULL) || !d->initialised || (s == NULL)) {
     if ((d != NULL) && d->initialised) {
       canfdi_count_inc(&d->diag.rejected);
+      d->failed_mask = 0U;
+      d->passed_mask = 0U;
     }
     if (report != NULL) {
       fill_none(report);
@@ -1020,6 +1024,11 @@ bool canfdi_diagnosis_corr_not_isolated(const canfdi_diagnosis_t *d)
 uint32_t canfdi_diagnosis_failed_mask(const canfdi_diagnosis_t *d)
 {
   return ((d != NULL) && d->initialised) ? d->failed_mask : 0U;
+}
+
+uint32_t canfdi_diagnosis_passed_mask(const canfdi_diagnosis_t *d)
+{
+  return ((d != NULL) && d->initialised) ? d->passed_mask : 0U;
 }
 
 int8_t canfdi_diagnosis_symptom(const canfdi_diagnosis_t *d, uint8_t component, uint8_t channel_idx)

@@ -222,7 +222,7 @@
  * ROM tables included): 5.3 kB (M4), 5.8 kB (M0). Stack (-fstack-usage,
  * M0): diagnosis_step 152 bytes (update_channels inline), calling
  * channel_move (40).
- * Memory: sizeof(canfdi_diagnosis_t) = 816 bytes on a 32-bit target (the
+ * Memory: sizeof(canfdi_diagnosis_t) = 820 bytes on a 32-bit target (the
  * configuration copy, the thresholds' reciprocals, the channel and flag
  * persistence, the normalised values, the compiled rules, the weights, the
  * results, the hard rules' last verdicts, the flux gate's counters, the
@@ -408,6 +408,7 @@ typedef struct {
   bool corr_not_isolated;
   bool initialised;
   uint32_t failed_mask; /* bit i: fault i FAILED this step */
+  uint32_t passed_mask; /* bit i: fault i PASSED this step */
   canfdi_diagnosis_diag_t diag;
 } canfdi_diagnosis_t;
 
@@ -481,9 +482,15 @@ const canfdi_diagnosis_result_t *canfdi_diagnosis_result(const canfdi_diagnosis_
  * sensor: report P2135. false for NULL. */
 bool canfdi_diagnosis_corr_not_isolated(const canfdi_diagnosis_t *d);
 
-/* Bitset of the faults FAILED in the last step (bit i = fault id i), for the
- * actuator manager. 0 for NULL. */
+/* Bitset of the faults FAILED in the last step (bit i = fault id i): the
+ * report's FAILED entries, for the trouble codes and the actuator manager.
+ * 0 for NULL, and after a rejected step. */
 uint32_t canfdi_diagnosis_failed_mask(const canfdi_diagnosis_t *d);
+
+/* Bitset of the faults PASSED in the last step: the report's PASSED
+ * entries (disjoint from the failed mask). 0 for NULL, and after a
+ * rejected step. */
+uint32_t canfdi_diagnosis_passed_mask(const canfdi_diagnosis_t *d);
 
 /* Persistent symptom of a channel (CANFDI_DIAG_SYM_*; UNKNOWN for bad
  * arguments), for logs and tests. */

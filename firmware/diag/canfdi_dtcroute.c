@@ -4,14 +4,18 @@
  */
 #include "diag/canfdi_dtcroute.h"
 
-#include <string.h>
-
 #include "core/canfdi_count.h"
 #include "core/canfdi_intrin.h"
 #include "diag/canfdi_diagnosis.h"
 
-/* Source 3 collects the DTCs it reports as a bit mask. */
+/* The DTCs of a step are collected as bit masks (bit = DTC table index). */
 CANFDI_STATIC_ASSERT(CANFDI_CFG_DTC_MAX_DTCS <= 32U, dtc_indices_fit_the_mask);
+CANFDI_STATIC_ASSERT(CANFDI_FAULT_COUNT <= 32U, fault_ids_fit_the_mask);
+
+/* The fault ids a verdict is routed for: 1 .. CANFDI_FAULT_COUNT - 1 (id 0
+ * names no fault). */
+#define FAULT_IDS \
+  (((CANFDI_FAULT_COUNT >= 32U) ? UINT32_MAX : ((UINT32_C(1) << (CANFDI_FAULT_COUNT & 31U)) - 1U)) & ~UINT32_C(1))
 
 void canfdi_dtcroute_default_cfg(canfdi_dtcroute_cfg_t *cfg)
 {
@@ -36,9 +40,18 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       uint32_t f;
       uint32_t j;
       r->cfg = *cfg;
+      r->comm_faults = 0U;
+      r->other_faults = 0U;
       for (f = 0U; f < CANFDI_FAULT_COUNT; f++) {
         for (j = 0U; j < CANFDI_CATALOGUE_MAX_DTCS; j++) {
           r->fault_dtc[f][j] = index_of(dtc, canfdi_catalogue_fault[f].dtc[j]);
+        }
+        if (f == 0U) {
+          /* no fault */
+        } else if (canfdi_catalogue_fault[f].kind == CANFDI_KIND_COMMUNICATION) {
+          r->comm_faults |= CANFDI_FAULT_BIT(f);
+        } else {
+          r->other_faults |= CANFDI_FAULT_BIT(f);
         }
       }
       for (j = 0U; j < (uint32_t)CANFDI_RX_MON_COUNT; j++) {
@@ -48,6 +61,7 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       r->p2135_n = 0U;
       r->faults = 0U;
       r->agg_last_valid = false;
+      r->src1_valid = false;
       r->changes_last = 0U;
       r->diag = (canfdi_dtcroute_diag_t){0};
       r->initialised = true;
@@ -57,47 +71,70 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
   return rc;
 }
 
-/* Source 1: per DTC the combined verdict of the faults that feed it;
- * returns how many DTCs have one. */
-static uint32_t combine_faults(const canfdi_dtcroute_t *r, const canfdi_dtcroute_in_t *in, int8_t *agg)
+/* The lowest set bit of x (not 0) as its index. */
+static uint32_t low_index(uint32_t x)
 {
-  uint32_t f;
-  uint32_t j;
-  uint32_t n = 0U;
-  for (f = 1U; f < CANFDI_FAULT_COUNT; f++) {
-    int8_t v = in->report[f];
-    if ((in->mgr_detected & CANFDI_FAULT_BIT(f)) != 0U) {
-      v = CANFDI_DIAG_REPORT_FAILED;
-    }
-    if (v != CANFDI_DIAG_REPORT_NONE) {
-      for (j = 0U; j < CANFDI_CATALOGUE_MAX_DTCS; j++) {
-        const uint8_t idx = r->fault_dtc[f][j];
-        if ((idx != CANFDI_DTC_NONE) && (agg[idx] != CANFDI_DIAG_REPORT_FAILED)) {
-          n += (agg[idx] == CANFDI_DIAG_REPORT_NONE) ? 1U : 0U;
-          agg[idx] = v;
-        }
-      }
-    }
-  }
-  return n;
+  return 31U - canfdi_clz32(x & ~(x - 1U));
 }
 
-/* Source 2: P2135 from the persistence of an unisolated disagreement. */
-static void p2135(canfdi_dtcroute_t *r, const canfdi_dtcroute_in_t *in, int8_t *agg)
+/* Source 1: the DTCs of the faults with a verdict, as two DTC masks (a DTC
+ * fails if any fault that feeds it fails, else passes if any passes), and
+ * how many DTCs have one. A function of the two fault masks alone: kept
+ * while they stay the same (most steps). */
+static void combine_faults(canfdi_dtcroute_t *r, uint32_t failed, uint32_t passed)
 {
-  if (r->p2135_dtc != CANFDI_DTC_NONE) {
-    if (in->corr_not_isolated) {
-      if (r->p2135_n < r->cfg.p2135_steps) {
-        r->p2135_n++;
-      } else {
-        agg[r->p2135_dtc] = CANFDI_DIAG_REPORT_FAILED;
+  if (!r->src1_valid || (failed != r->src1_in_fail) || (passed != r->src1_in_pass)) {
+    uint32_t fm = 0U;
+    uint32_t pm = 0U;
+    uint32_t n = 0U;
+    uint32_t x = failed | passed;
+    while (x != 0U) {
+      const uint32_t f = low_index(x);
+      const uint32_t fbit = CANFDI_FAULT_BIT(f);
+      uint32_t dm = 0U;
+      uint32_t j;
+      x &= x - 1U;
+      for (j = 0U; j < CANFDI_CATALOGUE_MAX_DTCS; j++) {
+        const uint8_t idx = r->fault_dtc[f][j];
+        dm |= (idx != CANFDI_DTC_NONE) ? (UINT32_C(1) << idx) : 0U;
       }
-    } else if (in->corr_tested) {
-      r->p2135_n = 0U;
-      agg[r->p2135_dtc] = CANFDI_DIAG_REPORT_PASSED;
-    } else {
-      /* the correlation channel is invalid: not tested */
+      if ((failed & fbit) != 0U) {
+        fm |= dm;
+      } else {
+        pm |= dm;
+      }
     }
+    pm &= ~fm;
+    for (x = fm | pm; x != 0U; x &= x - 1U) {
+      n++;
+    }
+    r->src1_in_fail = failed;
+    r->src1_in_pass = passed;
+    r->src1_fail = fm;
+    r->src1_pass = pm;
+    r->src1_n = n;
+    r->src1_valid = true;
+  }
+}
+
+/* Source 2: P2135 from the persistence of an unisolated disagreement, into
+ * the DTC masks *fm / *pm (it overrides source 1's verdict of that DTC). */
+static void p2135(canfdi_dtcroute_t *r, const canfdi_dtcroute_in_t *in, uint32_t *fm, uint32_t *pm)
+{
+  const uint32_t bit = UINT32_C(1) << r->p2135_dtc;
+  if (in->corr_not_isolated) {
+    if (r->p2135_n < r->cfg.p2135_steps) {
+      r->p2135_n++;
+    } else {
+      *fm |= bit;
+      *pm &= ~bit;
+    }
+  } else if (in->corr_tested) {
+    r->p2135_n = 0U;
+    *pm |= bit;
+    *fm &= ~bit;
+  } else {
+    /* the correlation channel is invalid: not tested */
   }
 }
 
@@ -124,36 +161,46 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
                              const canfdi_dtcroute_in_t *in)
 {
   int32_t rc = -CANFDI_EINVAL;
-  if ((r != NULL) && r->initialised && (dtc != NULL) && (in != NULL) && (in->report != NULL) &&
-      (in->com != NULL)) {
-    int8_t agg[CANFDI_CFG_DTC_MAX_DTCS];
+  if ((r != NULL) && r->initialised && (dtc != NULL) && (in != NULL) && (in->com != NULL)) {
+    /* the manager's own findings fail */
+    const uint32_t failed = (in->failed | in->mgr_detected) & FAULT_IDS;
+    uint32_t fm;
+    uint32_t pm;
     uint32_t n_agg;
     uint32_t act;
     uint32_t touched = 0U;
-    uint32_t failed = 0U;
+    uint32_t bits_failed = 0U;
     uint32_t j;
     rc = 0;
-    (void)memset(agg, CANFDI_DIAG_REPORT_NONE, sizeof agg);
-    n_agg = combine_faults(r, in, agg);
+    combine_faults(r, failed, (in->passed & ~failed) & FAULT_IDS);
+    fm = r->src1_fail;
+    pm = r->src1_pass;
+    n_agg = r->src1_n;
     if (r->p2135_dtc != CANFDI_DTC_NONE) {
-      const bool had = (agg[r->p2135_dtc] != CANFDI_DIAG_REPORT_NONE);
-      p2135(r, in, agg);
-      n_agg += (!had && (agg[r->p2135_dtc] != CANFDI_DIAG_REPORT_NONE)) ? 1U : 0U;
+      const uint32_t bit = UINT32_C(1) << r->p2135_dtc;
+      const bool had = ((fm | pm) & bit) != 0U;
+      p2135(r, in, &fm, &pm);
+      n_agg += (!had && (((fm | pm) & bit) != 0U)) ? 1U : 0U;
     }
     if (r->agg_last_valid && dtc->cycle_active && (dtc->changes == r->changes_last) &&
-        (memcmp(agg, r->agg_last, sizeof agg) == 0)) {
+        (fm == r->agg_last_fail) && (pm == r->agg_last_pass)) {
       /* the same verdicts to an unchanged memory: nothing would change
        * (the header); counted as given (a DTC beyond the memory's table
        * has no index, so every entry counted is one of its DTCs) */
       canfdi_count_add(&r->diag.reports, n_agg);
     } else {
-      for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
-        if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
-          rc += report(r, dtc, (uint8_t)j,
-                       (agg[j] > 0) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, in->ff);
+      /* in DTC table order: the lowest index first */
+      uint32_t x = fm | pm;
+      while (x != 0U) {
+        const uint32_t idx = low_index(x);
+        x &= x - 1U;
+        if (idx < (uint32_t)dtc->n_dtcs) {
+          rc += report(r, dtc, (uint8_t)idx,
+                       (((fm >> idx) & 1U) != 0U) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, in->ff);
         }
       }
-      (void)memcpy(r->agg_last, agg, sizeof agg);
+      r->agg_last_fail = fm;
+      r->agg_last_pass = pm;
       r->agg_last_valid = (rc == 0);
     }
     r->changes_last = dtc->changes;
@@ -169,17 +216,17 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
       if (((act & bit) != 0U) && (idx != CANFDI_DTC_NONE)) {
         touched |= UINT32_C(1) << idx;
         if ((in->com->prefailed & bit) != 0U) {
-          failed |= UINT32_C(1) << idx;
+          bits_failed |= UINT32_C(1) << idx;
         }
       }
     }
     while (touched != 0U) {
       const uint32_t low = touched & ~(touched - 1U); /* the lowest set bit */
-      const uint32_t idx = 31U - canfdi_clz32(low);
+      const uint32_t idx = low_index(low);
       touched &= touched - 1U;
       if (idx < (uint32_t)dtc->n_dtcs) {
         rc += report(r, dtc, (uint8_t)idx,
-                     ((failed & low) != 0U) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED, in->ff);
+                     ((bits_failed & low) != 0U) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED, in->ff);
       }
     }
     canfdi_count_inc(&r->diag.steps);
@@ -187,29 +234,24 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
   return rc;
 }
 
-uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t *dtc,
-                                        const int8_t *report_v)
+uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t *dtc, uint32_t failed,
+                                        uint32_t passed)
 {
   uint32_t bits = 0U;
-  if ((r != NULL) && r->initialised && (dtc != NULL) && (report_v != NULL)) {
-    uint32_t f;
-    bits = r->faults;
-    for (f = 1U; f < CANFDI_FAULT_COUNT; f++) {
-      if (canfdi_catalogue_fault[f].kind == CANFDI_KIND_COMMUNICATION) {
-        const uint8_t idx = r->fault_dtc[f][0];
-        const uint8_t st =
-            ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs)) ? canfdi_dtc_status_at(dtc, idx) : 0U;
-        if ((st & CANFDI_DTC_ST_TF) != 0U) {
-          bits |= CANFDI_FAULT_BIT(f);
-        } else {
-          bits &= ~CANFDI_FAULT_BIT(f);
-        }
-      } else if (report_v[f] == CANFDI_DIAG_REPORT_FAILED) {
+  if ((r != NULL) && r->initialised && (dtc != NULL)) {
+    /* the others: FAILED sets, PASSED clears (disjoint), NONE keeps */
+    uint32_t x = r->comm_faults;
+    bits = (r->faults | (failed & r->other_faults)) & ~(passed & r->other_faults);
+    while (x != 0U) {
+      const uint32_t f = low_index(x);
+      const uint8_t idx = r->fault_dtc[f][0];
+      const uint8_t st =
+          ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs)) ? canfdi_dtc_status_at(dtc, idx) : 0U;
+      x &= x - 1U;
+      if ((st & CANFDI_DTC_ST_TF) != 0U) {
         bits |= CANFDI_FAULT_BIT(f);
-      } else if (report_v[f] == CANFDI_DIAG_REPORT_PASSED) {
-        bits &= ~CANFDI_FAULT_BIT(f);
       } else {
-        /* not tested: keep */
+        bits &= ~CANFDI_FAULT_BIT(f);
       }
     }
     r->faults = bits;

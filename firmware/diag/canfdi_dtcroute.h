@@ -4,12 +4,12 @@
  * faults the actuator manager acts on.
  *
  * Sources per step, reported in this order:
- *   1. the diagnosis' verdict per catalogue fault (canfdi_diagnosis_step),
- *      overridden by FAILED for the faults the actuator manager detected
- *      itself in the last step; a DTC fed by several faults (P0122: TPS1
- *      open and both TPS lost) fails if any of them reports FAILED and
- *      passes only if none fails and one passes; reported in DTC table
- *      order;
+ *   1. the diagnosis' verdict per catalogue fault (its failed and passed
+ *      masks, canfdi_diagnosis_failed_mask / _passed_mask), overridden by
+ *      FAILED for the faults the actuator manager detected itself in the
+ *      last step; a DTC fed by several faults (P0122: TPS1 open and both
+ *      TPS lost) fails if any of them reports FAILED and passes only if
+ *      none fails and one passes; reported in DTC table order;
  *   2. P2135 (TPS1/TPS2 correlation), which has no fault id: FAILED once
  *      the diagnosis has held a TPS disagreement it could not isolate to
  *      one sensor for p2135_steps consecutive steps; PASSED while the
@@ -29,28 +29,39 @@
  * takes at once; reported again to a memory that has not changed since
  * (its `changes` counter, which every status and clear and cycle moves),
  * the same verdicts change nothing: such a step counts them as reported
- * and gives them no second time (a steady state, most steps).
+ * and gives them no second time (a steady state, most steps). This holds
+ * because no other source reports their codes in between: the diagnosis
+ * gives no verdict for the communication faults and the manager detects
+ * none of them, so the U-codes are source 3's alone (a PREPASSED moves a
+ * debounce counter without moving `changes`).
  *
  * Faults for the manager (canfdi_dtcroute_manager_faults): a communication
  * fault while its trouble code has testFailed (qualified by the DTC memory's
  * debouncing); any other fault latched from a FAILED verdict of the
  * diagnosis until a PASSED one (not tested keeps it).
  *
+ * Why masks. Both run every step, and a step's verdicts rarely differ from
+ * the last step's: with the verdicts as bit masks (faults, and DTCs by
+ * table index) the steady state is a few word compares. A pass over the
+ * 32 faults' verdicts (int8_t per fault) in both functions, and the
+ * diagnosis writing them, cost about 900 instructions per step more on a
+ * Cortex-M4 (`make pil-test`, dcm_ia_offset: mean 20 709 against 19 788).
+ *
  * Scaling and overflow: no arithmetic besides the persistence count
  * (uint16_t, stops at p2135_steps) and the saturating counters.
- * Cost per canfdi_dtcroute_step: one pass over the faults (32 x 2 table
- * reads for those with a verdict), a compare of the 32 verdicts with the
- * last ones, a pass over the DTCs only when the verdicts or the memory
- * changed (32 reports at most, each a canfdi_dtc_report; a pass that
- * would change nothing, canfdi_dtc_pass_is_noop, is counted without the
- * call), the monitor bits up to the highest one set (20 at most) and one
- * report per DTC they feed (collected as a bit mask, reported lowest index
- * first).
- * manager_faults: one pass over the faults, a status read per
+ * Cost per canfdi_dtcroute_step: source 1's DTC masks only when the fault
+ * masks differ from the last step's (then two table reads per fault with a
+ * verdict); a compare of the two DTC masks with the last reported ones; a
+ * report per DTC with a verdict only when they or the memory changed (32
+ * at most, each a canfdi_dtc_report; a pass that would change nothing,
+ * canfdi_dtc_pass_is_noop, is counted without the call); the monitor bits
+ * up to the highest one set (20 at most) and one report per DTC they feed
+ * (collected as a bit mask, reported lowest index first).
+ * manager_faults: two mask operations and a status read per
  * communication fault.
- * Memory: sizeof(canfdi_dtcroute_t) = 152 bytes on a 32-bit target (the
- * index tables 64 + 20, the last verdicts 32, state, config,
- * diagnostics). No heap.
+ * Memory: sizeof(canfdi_dtcroute_t) = 156 bytes on a 32-bit target (the
+ * index tables 64 + 20, the fault masks, source 1's last inputs and
+ * masks, the last reported masks, state, config, diagnostics). No heap.
  */
 #ifndef CANFDI_DTCROUTE_H
 #define CANFDI_DTCROUTE_H
@@ -66,7 +77,8 @@ typedef struct {
 
 /* One step's verdicts. */
 typedef struct {
-  const int8_t *report;        /* [CANFDI_FAULT_COUNT] CANFDI_DIAG_REPORT_* per fault id */
+  uint32_t failed;             /* fault bits the diagnosis reports FAILED */
+  uint32_t passed;             /* fault bits it reports PASSED (disjoint) */
   uint32_t mgr_detected;       /* fault bits the manager detected itself (last step) */
   bool corr_not_isolated;      /* TPS disagreement persistent, not isolated */
   bool corr_tested;            /* the TPS correlation channel is valid */
@@ -88,8 +100,17 @@ typedef struct {
   uint8_t p2135_dtc;                                               /* DTC index or NONE */
   uint16_t p2135_n;   /* steps the disagreement stayed unisolated */
   uint32_t faults;    /* latched fault bits for the manager */
-  int8_t agg_last[CANFDI_CFG_DTC_MAX_DTCS]; /* sources 1-2 as last reported */
+  uint32_t comm_faults;  /* fault bits of kind communication */
+  uint32_t other_faults; /* the other fault bits (ids >= 1) */
+  uint32_t src1_in_fail; /* source 1's fault masks as last combined */
+  uint32_t src1_in_pass;
+  uint32_t src1_fail;    /* their DTC masks (bit = table index) */
+  uint32_t src1_pass;
+  uint32_t src1_n;       /* DTCs with a verdict among them */
+  uint32_t agg_last_fail; /* sources 1-2 as last reported: failed DTCs */
+  uint32_t agg_last_pass; /* and passed DTCs */
   uint32_t changes_last; /* dtc->changes after they were last reported */
+  bool src1_valid;
   bool agg_last_valid;
   canfdi_dtcroute_diag_t diag;
   bool initialised;
@@ -120,11 +141,12 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
 /*
  * Updates and returns the fault bits for the manager (bit i = catalogue
  * fault id i): communication faults from their DTC's testFailed, the others
- * latched from report[] (FAILED sets, PASSED clears, NONE keeps). 0 for a
- * NULL argument. Cost: see the header.
+ * latched from the diagnosis' masks (failed sets, passed clears, neither
+ * keeps; the two are disjoint). 0 for a NULL argument. Cost: see the
+ * header.
  */
-uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t *dtc,
-                                        const int8_t *report);
+uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t *dtc, uint32_t failed,
+                                        uint32_t passed);
 
 /* Diagnostics snapshot (zeros for NULL). */
 canfdi_dtcroute_diag_t canfdi_dtcroute_diag(const canfdi_dtcroute_t *r);

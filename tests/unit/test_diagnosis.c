@@ -212,6 +212,12 @@ START_TEST(test_isolates_each_fault)
   ck_assert_msg(first <= (uint32_t)(cfg.sym_on_steps + cfg.par_fresh_updates + cfg.isolate_steps),
                 "%s: first at %u", v->name, first);
   ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 1UL << v->fault);
+  /* the two masks are the report's FAILED and PASSED entries */
+  for (k = 0U; k < CANFDI_FAULT_COUNT; k++) {
+    ck_assert_uint_eq((canfdi_diagnosis_failed_mask(&dg) >> k) & 1U, (rep[k] == CANFDI_DIAG_REPORT_FAILED) ? 1U : 0U);
+    ck_assert_uint_eq((canfdi_diagnosis_passed_mask(&dg) >> k) & 1U, (rep[k] == CANFDI_DIAG_REPORT_PASSED) ? 1U : 0U);
+  }
+  ck_assert_uint_ne(canfdi_diagnosis_passed_mask(&dg), 0U);
   ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, v->component, &conf), v->fault);
   ck_assert_uint_ge(conf, cfg.conf_min_pct);
   ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, (v->component == DCM) ? THR : DCM, NULL), 0U);
@@ -668,12 +674,15 @@ START_TEST(test_reset_and_invalid)
   canfdi_diagnosis_step(&dg, &s, rep);
   ck_assert_int_eq(rep[CANFDI_FAULT_DCM_RA_UP], CANFDI_DIAG_REPORT_NONE);
   ck_assert_int_eq(rep[CANFDI_FAULT_DCM_BRIDGE_A_DEAD], CANFDI_DIAG_REPORT_PASSED);
-  /* NULL arguments */
+  ck_assert_uint_ne(canfdi_diagnosis_passed_mask(&dg) & CANFDI_FAULT_BIT(CANFDI_FAULT_DCM_BRIDGE_A_DEAD), 0U);
+  /* NULL arguments: a rejected step reports nothing, in the masks too */
   memset(rep, 5, sizeof(rep));
   canfdi_diagnosis_step(&dg, NULL, rep);
   for (k = 0U; k < CANFDI_FAULT_COUNT; k++) {
     ck_assert_int_eq(rep[k], CANFDI_DIAG_REPORT_NONE);
   }
+  ck_assert_uint_eq(canfdi_diagnosis_failed_mask(&dg), 0U);
+  ck_assert_uint_eq(canfdi_diagnosis_passed_mask(&dg), 0U);
   ck_assert_uint_eq(canfdi_diagnosis_diag(&dg).rejected, 1U);
   canfdi_diagnosis_step(NULL, &s, rep);
   canfdi_diagnosis_step(&dg, &s, NULL);
@@ -682,6 +691,7 @@ START_TEST(test_reset_and_invalid)
   ck_assert_uint_eq(canfdi_diagnosis_isolated(&dg, CANFDI_COMPONENT_COMM, NULL), 0U);
   ck_assert_ptr_null(canfdi_diagnosis_result(&dg, 7U));
   ck_assert_uint_eq(canfdi_diagnosis_failed_mask(NULL), 0U);
+  ck_assert_uint_eq(canfdi_diagnosis_passed_mask(NULL), 0U);
   ck_assert(!canfdi_diagnosis_corr_not_isolated(NULL));
   ck_assert_int_eq(canfdi_diagnosis_symptom(&dg, DCM, CANFDI_DIAG_N_CH), CANFDI_DIAG_SYM_UNKNOWN);
   ck_assert_uint_eq(canfdi_diagnosis_diag(NULL).steps, 0U);
