@@ -27,6 +27,7 @@ void canfdi_app_sym_default_cfg(canfdi_app_sym_cfg_t *cfg)
 int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg)
 {
   int32_t rc = -CANFDI_EINVAL;
+  uint32_t i;
   if ((m != NULL) && (cfg != NULL) && (cfg->dcm_w_on_rad_s_q16 > 0) && (cfg->dcm_i_on_A_q16 > 0) &&
       (cfg->thr_u_on_V_q16 > 0) && (cfg->thr_i_on_A_q16 > 0) && (cfg->w_jump_rad_s_q16 > 0)) {
     m->cfg = *cfg;
@@ -44,6 +45,9 @@ int32_t canfdi_app_sym_init(canfdi_app_sym_t *m, const canfdi_app_sym_cfg_t *cfg
     m->r1_est_q32 = 0;
     m->r1_est_w_q16 = 0;
     m->r1_quiet = 0U;
+    for (i = 0U; i < CANFDI_APP_SYM_N_PDEV; i++) {
+      m->pdev[i] = (canfdi_app_sym_quot_t){0, 0, 0};
+    }
     rc = CANFDI_OK;
   }
   return rc;
@@ -141,10 +145,22 @@ static int32_t uac_channel(const canfdi_app_sym_in_t *in, const canfdi_symptoms_
   return x;
 }
 
-/* (est - nom) / nom in Q16.16, saturating; both in the same Q format. */
-static int32_t pdev_q16(int32_t est, int32_t nom)
+/* num / den in Q16.16 (canfdi_div_s32_qn, saturating) for den != 0, the
+ * quotient kept in *k while num and den stay the same. */
+static int32_t div_kept_q16(canfdi_app_sym_quot_t *k, int32_t num, int32_t den)
 {
-  return (nom != 0) ? canfdi_div_s32_qn(canfdi_sub_s32_sat(est, nom), nom, 16U) : 0;
+  if ((num != k->num) || (den != k->den)) {
+    k->q = canfdi_div_s32_qn(num, den, 16U);
+    k->num = num;
+    k->den = den;
+  }
+  return k->q;
+}
+
+/* (est - nom) / nom in Q16.16, saturating; both in the same Q format. */
+static int32_t pdev_q16(canfdi_app_sym_quot_t *k, int32_t est, int32_t nom)
+{
+  return (nom != 0) ? div_kept_q16(k, canfdi_sub_s32_sat(est, nom), nom) : 0;
 }
 
 static void residuals(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
@@ -393,7 +409,7 @@ static void dcm_flux_pred(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   }
 }
 
-static void dcm_parameters(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+static void dcm_parameters(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
   const canfdi_est_dcm_t *e = in->est_dcm;
   const canfdi_est_dcm_cfg_t *c = &e->cfg;
@@ -406,21 +422,21 @@ static void dcm_parameters(const canfdi_app_sym_t *m, const canfdi_app_sym_in_t 
   if ((m->dcm_ref[0] == 0) || (m->mech_hold > 0U)) {
     mech = 0U;
   }
-  s->dcm_pdev_q16[CANFDI_SYM_DCM_P_RA] = pdev_q16(canfdi_est_dcm_ra_q16(e), c->ra_nom_q16);
-  s->dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI] = pdev_q16(canfdi_est_dcm_psi_q16(e), c->psi_nom_q16);
-  s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J] = pdev_q16(canfdi_est_dcm_j_q24(e), c->j_nom_q24);
+  s->dcm_pdev_q16[CANFDI_SYM_DCM_P_RA] = pdev_q16(&m->pdev[0], canfdi_est_dcm_ra_q16(e), c->ra_nom_q16);
+  s->dcm_pdev_q16[CANFDI_SYM_DCM_P_PSI] = pdev_q16(&m->pdev[1], canfdi_est_dcm_psi_q16(e), c->psi_nom_q16);
+  s->dcm_pdev_q16[CANFDI_SYM_DCM_P_J] = pdev_q16(&m->pdev[2], canfdi_est_dcm_j_q24(e), c->j_nom_q24);
   s->dcm_pdev_q16[CANFDI_SYM_DCM_P_FRICTION] =
-      (c->mc_nom_q16 != 0) ? canfdi_div_s32_qn(canfdi_sub_s32_sat(mf0, mf0_nom), c->mc_nom_q16, 16U) : 0;
+      (c->mc_nom_q16 != 0) ? div_kept_q16(&m->pdev[3], canfdi_sub_s32_sat(mf0, mf0_nom), c->mc_nom_q16) : 0;
   s->dcm_upd = in->dcm_est_on ? canfdi_est_dcm_updated(e) : 0U;
   s->dcm_pdev_valid = !in->dcm_est_on ? 0U
                                       : (uint8_t)((canfdi_est_dcm_arm_converged(e) ? 0x03U : 0U) | mech);
 }
 
-static void thr_parameters(const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
+static void thr_parameters(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, canfdi_symptoms_t *s)
 {
   const canfdi_est_thr_t *e = in->est_thr;
-  s->thr_pdev_q16[CANFDI_SYM_THR_P_R] = pdev_q16(canfdi_est_thr_r_q16(e), e->cfg.r_nom_q16);
-  s->thr_pdev_q16[CANFDI_SYM_THR_P_K] = pdev_q16(canfdi_est_thr_k_q16(e), e->cfg.k_nom_q16);
+  s->thr_pdev_q16[CANFDI_SYM_THR_P_R] = pdev_q16(&m->pdev[4], canfdi_est_thr_r_q16(e), e->cfg.r_nom_q16);
+  s->thr_pdev_q16[CANFDI_SYM_THR_P_K] = pdev_q16(&m->pdev[5], canfdi_est_thr_k_q16(e), e->cfg.k_nom_q16);
   s->thr_pdev_q16[CANFDI_SYM_THR_P_SPRING] = canfdi_est_thr_fast_spring_dev_q16(e);
   s->thr_pdev_q16[CANFDI_SYM_THR_P_FRICTION] = canfdi_est_thr_fast_friction_dev_q16(e);
   s->thr_upd = in->thr_est_on ? canfdi_est_thr_updated(e) : 0U;
@@ -477,7 +493,7 @@ void canfdi_app_sym_build(canfdi_app_sym_t *m, const canfdi_app_sym_in_t *in, ca
   references(m, in, s);
   residuals(in, s);
   dcm_parameters(m, in, s);
-  thr_parameters(in, s);
+  thr_parameters(m, in, s);
   s->flags = flags(in);
   speed_jump(m, in, s);
   s->flags |= m->jump ? CANFDI_SYM_F_DCM_W_JUMP : 0U;

@@ -81,8 +81,9 @@
  * below on / 2, and in between keeps the sign it had (0 stays 0).
  *
  * Scaling and overflow: Q16.16; deviations by canfdi_div_s32_qn
- * (saturating), differences by saturating subtraction. Cost: 8 saturating
- * divisions, 2 multiplications and ~50 compares per step, plus for the
+ * (saturating), differences by saturating subtraction. Cost: 2 saturating
+ * divisions, 2 multiplications and ~60 compares per step, the six
+ * parameter deviations' divisions only when an estimate moved, plus for the
  * flux-loss prediction up to 9 divisions and 8 multiplications while a
  * residual is beyond its threshold. Memory: 64 bytes of state and
  * configuration; no heap.
@@ -125,6 +126,21 @@ typedef struct {
                                  * symptom may still be held) */
 } canfdi_app_sym_cfg_t;
 
+/* A quotient with its operands: the parameter deviations' divisions are
+ * redone only when an operand changed (the estimates move on their
+ * estimator's updates, a few steps in ten; the quotient is a function of
+ * the two operands alone, so the kept one is the same bits). den == 0
+ * never matches (no deviation divides by 0). */
+typedef struct {
+  int32_t num;
+  int32_t den;
+  int32_t q;
+} canfdi_app_sym_quot_t;
+
+/* The deviations kept that way: DC motor R_A, Psi, J, friction; throttle
+ * R, k. */
+#define CANFDI_APP_SYM_N_PDEV 6U
+
 typedef struct {
   canfdi_app_sym_cfg_t cfg;
   int8_t dcm_ref[2];            /* the references of the last step */
@@ -141,6 +157,8 @@ typedef struct {
   int32_t r1_est_w_q16;         /* the sum of those weights, Q16.16 (<= 1 / forget) */
   uint16_t r1_quiet;            /* steps r1 has been below the zero level
                                  * (saturating at cfg.rax_quiet_steps) */
+  canfdi_app_sym_quot_t pdev[CANFDI_APP_SYM_N_PDEV]; /* the parameter
+                                 * deviations' last quotients */
 } canfdi_app_sym_t;
 
 typedef struct {
