@@ -4,6 +4,7 @@
  * in the manner of CMSIS's core intrinsics:
  *
  *   canfdi_clz32, canfdi_clz64   count leading zeros (normalisation)
+ *   canfdi_ctz32                 count trailing zeros (bit masks)
  *   canfdi_mla_hi_rnd            acc + round(a b / 2^32), the high word of a
  *                                rounded 32x32->64 multiply-accumulate
  *
@@ -63,6 +64,32 @@ static inline unsigned canfdi_clz32(uint32_t x)
       n += 1U;
     }
   }
+#endif
+  return n;
+}
+
+/*
+ * Trailing zeros of x != 0: 0..31, the index of its lowest set bit (for
+ * walking a bit mask from its lowest bit). Where CLZ exists: 31 minus the
+ * leading zeros of that bit. Elsewhere the bit 2^i times the de Bruijn
+ * constant 0x077CB531 (modulo 2^32) has a different top five bits for each
+ * i, and a 32-entry table maps them back to i: one multiply and one load
+ * (ARMv6-M has a single-cycle MULS, no CLZ). The table is built from the
+ * constant: entry (0x077CB531 << i) >> 27 holds i.
+ * Scaling and overflow: none (a bit index); the product wraps by design.
+ */
+static inline unsigned canfdi_ctz32(uint32_t x)
+{
+  const uint32_t low = x & ~(x - 1U); /* x != 0: no wrap */
+  unsigned n;
+  CANFDI_ASSERT(x != 0U);
+#if defined(__ARM_FEATURE_CLZ)
+  n = 31U - (unsigned)__builtin_clz(low);
+#else
+  static const uint8_t debruijn_index[32] = {0U,  1U,  28U, 2U,  29U, 14U, 24U, 3U,  30U, 22U, 20U,
+                                             15U, 25U, 17U, 4U,  8U,  31U, 27U, 13U, 23U, 21U, 19U,
+                                             16U, 7U,  26U, 12U, 18U, 6U,  11U, 5U,  10U, 9U};
+  n = debruijn_index[(low * 0x077CB531U) >> 27];
 #endif
   return n;
 }

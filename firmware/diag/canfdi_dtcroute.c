@@ -72,9 +72,9 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
 }
 
 /* The lowest set bit of x (not 0) as its index. */
-static uint32_t low_index(uint32_t x)
+static inline uint32_t low_index(uint32_t x)
 {
-  return 31U - canfdi_clz32(x & ~(x - 1U));
+  return (uint32_t)canfdi_ctz32(x);
 }
 
 /* Source 1: the DTCs of the faults with a verdict, as two DTC masks (a DTC

@@ -93,6 +93,7 @@ static void guard_fixp(void)
   sink32(canfdi_wrap_u32_to_s32(in_u32));
   sink64(canfdi_wrap_u64_to_s64(in_u64));
   sink32((int32_t)canfdi_clz32(in_u32));
+  sink32((int32_t)canfdi_ctz32(in_u32 | 1U));
   sink32((int32_t)canfdi_clz64(in_u64));
   sink32(canfdi_mla_hi_rnd(a, b, c));
   sinku64(canfdi_umull32(in_u32, (uint32_t)b));

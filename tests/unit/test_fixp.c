@@ -1039,6 +1039,10 @@ START_TEST(test_intrin)
     ck_assert_uint_eq(canfdi_clz32(x), 31U - b);
     ck_assert_uint_eq(canfdi_clz32(x | (x - 1U)), 31U - b);
     ck_assert_uint_eq(canfdi_clz32(x | 1U), 31U - b);
+    /* the lowest set bit, whatever lies above it */
+    ck_assert_uint_eq(canfdi_ctz32(x), b);
+    ck_assert_uint_eq(canfdi_ctz32(x | ~(x | (x - 1U))), b);
+    ck_assert_uint_eq(canfdi_ctz32(x | 0x80000000U), b);
   }
   for (b = 0U; b < 64U; b++) {
     const uint64_t x = (uint64_t)1 << b;
