@@ -62,6 +62,9 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       r->faults = 0U;
       r->agg_last_valid = false;
       r->src1_valid = false;
+      r->comm_valid = false;
+      r->comm_tf = 0U;
+      r->comm_changes = 0U;
       r->changes_last = 0U;
       r->diag = (canfdi_dtcroute_diag_t){0};
       r->initialised = true;
@@ -239,21 +242,27 @@ uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t
 {
   uint32_t bits = 0U;
   if ((r != NULL) && r->initialised && (dtc != NULL)) {
-    /* the others: FAILED sets, PASSED clears (disjoint), NONE keeps */
-    uint32_t x = r->comm_faults;
-    bits = (r->faults | (failed & r->other_faults)) & ~(passed & r->other_faults);
-    while (x != 0U) {
-      const uint32_t f = low_index(x);
-      const uint8_t idx = r->fault_dtc[f][0];
-      const uint8_t st =
-          ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs)) ? canfdi_dtc_status_at(dtc, idx) : 0U;
-      x &= x - 1U;
-      if ((st & CANFDI_DTC_ST_TF) != 0U) {
-        bits |= CANFDI_FAULT_BIT(f);
-      } else {
-        bits &= ~CANFDI_FAULT_BIT(f);
+    /* the communication faults: their codes' testFailed, read again only
+     * when the memory changed (its `changes` moves with every status) */
+    if (!r->comm_valid || (dtc->changes != r->comm_changes)) {
+      uint32_t x = r->comm_faults;
+      uint32_t c = 0U;
+      while (x != 0U) {
+        const uint32_t f = low_index(x);
+        const uint8_t idx = r->fault_dtc[f][0];
+        const uint8_t st = ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs))
+                               ? canfdi_dtc_status_at(dtc, idx)
+                               : 0U;
+        x &= x - 1U;
+        c |= ((st & CANFDI_DTC_ST_TF) != 0U) ? CANFDI_FAULT_BIT(f) : 0U;
       }
+      r->comm_tf = c;
+      r->comm_changes = dtc->changes;
+      r->comm_valid = true;
     }
+    /* the others: FAILED sets, PASSED clears (disjoint), NONE keeps */
+    bits = (r->faults | (failed & r->other_faults)) & ~(passed & r->other_faults);
+    bits = (bits & ~r->comm_faults) | r->comm_tf;
     r->faults = bits;
   }
   return bits;

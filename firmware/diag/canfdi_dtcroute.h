@@ -57,11 +57,12 @@
  * canfdi_dtc_pass_is_noop, is counted without the call); the monitor bits
  * up to the highest one set (20 at most) and one report per DTC they feed
  * (collected as a bit mask, reported lowest index first).
- * manager_faults: two mask operations and a status read per
- * communication fault.
- * Memory: sizeof(canfdi_dtcroute_t) = 156 bytes on a 32-bit target (the
+ * manager_faults: a few mask operations, and a status read per
+ * communication fault when the memory changed since the last call.
+ * Memory: sizeof(canfdi_dtcroute_t) = 164 bytes on a 32-bit target (the
  * index tables 64 + 20, the fault masks, source 1's last inputs and
- * masks, the last reported masks, state, config, diagnostics). No heap.
+ * masks, the last reported masks, the communication faults' testFailed,
+ * state, config, diagnostics). No heap.
  */
 #ifndef CANFDI_DTCROUTE_H
 #define CANFDI_DTCROUTE_H
@@ -110,8 +111,11 @@ typedef struct {
   uint32_t agg_last_fail; /* sources 1-2 as last reported: failed DTCs */
   uint32_t agg_last_pass; /* and passed DTCs */
   uint32_t changes_last; /* dtc->changes after they were last reported */
+  uint32_t comm_tf;      /* the communication faults with testFailed */
+  uint32_t comm_changes; /* dtc->changes when comm_tf was read */
   bool src1_valid;
   bool agg_last_valid;
+  bool comm_valid;
   canfdi_dtcroute_diag_t diag;
   bool initialised;
 } canfdi_dtcroute_t;
