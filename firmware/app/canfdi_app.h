@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      18 548   20 297   26 566
- *   Cortex-M4 (an386)      18 548   20 300   26 574
- *   Cortex-M0 (microbit)   36 534   41 424   53 699
- * and at most 27 276 (M4) / 56 639 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      17 281   18 990   25 978
+ *   Cortex-M4 (an386)      17 281   18 993   25 986
+ *   Cortex-M0 (microbit)   34 231   39 090   52 754
+ * and at most 26 556 (M4) / 54 401 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -124,16 +124,16 @@
  * (tests/pil/pil_profile.py; its split is summarised in
  * docs/requirements.md, requirement 1). A 1 ms step needs a Cortex-M4 of
  * roughly 40 MHz or more with margin (the worst step at ~1.2 cycles per
- * instruction: 33 MHz for the whole millisecond); on a Cortex-M0 at
+ * instruction: 32 MHz for the whole millisecond); on a Cortex-M0 at
  * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
  * halves, core/canfdi_fixp.h, and runs ~2.0 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 24 400 (M4) / 49 300
- * (M0) in those steps, within the same run's maxima (26 300 / 52 800).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 23 500 (M4) / 47 300
+ * (M0) in those steps, within the same run's maxima (25 700 / 51 800).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 27 276 / 56 639,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 26 556 / 54 401,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
@@ -155,10 +155,10 @@
  * fault is named up to one period later than unscheduled; the hard rules'
  * faults at the same step.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
- * all of the application's RAM, static: 10 960 bytes on Cortex-M (740 of
+ * all of the application's RAM, static: 11 040 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 496 B and 1 968 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 552 B and 1 968 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H
