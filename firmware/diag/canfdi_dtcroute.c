@@ -74,12 +74,6 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
   return rc;
 }
 
-/* The lowest set bit of x (not 0) as its index. */
-static inline uint32_t low_index(uint32_t x)
-{
-  return (uint32_t)canfdi_ctz32(x);
-}
-
 /* Source 1: the DTCs of the faults with a verdict, as two DTC masks (a DTC
  * fails if any fault that feeds it fails, else passes if any passes), and
  * how many DTCs have one. A function of the two fault masks alone: kept
@@ -92,7 +86,7 @@ static void combine_faults(canfdi_dtcroute_t *r, uint32_t failed, uint32_t passe
     uint32_t n = 0U;
     uint32_t x = failed | passed;
     while (x != 0U) {
-      const uint32_t f = low_index(x);
+      const uint32_t f = (uint32_t)canfdi_ctz32(x);
       const uint32_t fbit = CANFDI_FAULT_BIT(f);
       uint32_t dm = 0U;
       uint32_t j;
@@ -195,7 +189,7 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
       /* in DTC table order: the lowest index first */
       uint32_t x = fm | pm;
       while (x != 0U) {
-        const uint32_t idx = low_index(x);
+        const uint32_t idx = (uint32_t)canfdi_ctz32(x);
         x &= x - 1U;
         if (idx < (uint32_t)dtc->n_dtcs) {
           rc += report(r, dtc, (uint8_t)idx,
@@ -225,7 +219,7 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
     }
     while (touched != 0U) {
       const uint32_t low = touched & ~(touched - 1U); /* the lowest set bit */
-      const uint32_t idx = low_index(low);
+      const uint32_t idx = (uint32_t)canfdi_ctz32(low);
       touched &= touched - 1U;
       if (idx < (uint32_t)dtc->n_dtcs) {
         rc += report(r, dtc, (uint8_t)idx,
@@ -248,7 +242,7 @@ uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t
       uint32_t x = r->comm_faults;
       uint32_t c = 0U;
       while (x != 0U) {
-        const uint32_t f = low_index(x);
+        const uint32_t f = (uint32_t)canfdi_ctz32(x);
         const uint8_t idx = r->fault_dtc[f][0];
         const uint8_t st = ((idx != CANFDI_DTC_NONE) && (dtc->table != NULL) && (idx < dtc->n_dtcs))
                                ? canfdi_dtc_status_at(dtc, idx)
