@@ -14,7 +14,8 @@ that one.
 
 Prints the modules by mean instructions per step, the mean and the largest
 step per slot of the rate schedule (the step number modulo 10 from the
-first step), and the costliest steps split by module; --json writes the
+first step), and the costliest steps split by module and by function;
+--json writes the
 same.
 
 Usage: pil_profile.py --elf ELF --machine QEMU_MACHINE --run-dir DIR
@@ -64,6 +65,8 @@ def main():
     ap.add_argument("--json", help="write the figures here (merged with what the file holds)")
     ap.add_argument("--name", default="", help="a name for this run in the JSON")
     ap.add_argument("--top", type=int, default=3, help="costliest steps to split up")
+    ap.add_argument("--top-functions", type=int, default=20,
+                    help="functions listed per costliest step (JSON; the output prints the first 8)")
     a = ap.parse_args()
 
     syms = symbols(a.elf)
@@ -97,11 +100,13 @@ def main():
         t = sum(cur.values())
         totals.append(t)
         mods = collections.Counter()
+        fns = collections.Counter()
         for (f, m), n in cur.items():
             mods[m] += n
+            fns[f] += n
             per_fn[f] += n
             per_mod[m] += n
-        item = (t, step, dict(mods))
+        item = (t, step, dict(mods), dict(fns.most_common(a.top_functions)))
         if len(top) < a.top:
             heapq.heappush(top, item)
         elif t > top[0][0]:
@@ -149,8 +154,9 @@ def main():
         "modules": {m: round(v / n) for m, v in per_mod.most_common()},
         "functions": {f: round(v / n) for f, v in per_fn.most_common(40)},
         "slots": {str(s): {"mean": round(sum(v) / len(v)), "max": max(v)} for s, v in sorted(slot.items())},
-        "costliest_steps": [{"step": k, "instructions": t, "modules": dict(sorted(mods.items(), key=lambda x: -x[1]))}
-                            for t, k, mods in sorted(top, reverse=True)],
+        "costliest_steps": [{"step": k, "instructions": t, "modules": dict(sorted(mods.items(), key=lambda x: -x[1])),
+                             "functions": fns}
+                            for t, k, mods, fns in sorted(top, reverse=True)],
     }
     print(f"pil-profile: {a.name or a.run_dir} on {a.machine}: {n} steps, mean {res['mean']}, "
           f"max {res['max']} (step {res['max_step']})")
@@ -162,6 +168,8 @@ def main():
     for c in res["costliest_steps"]:
         parts = ", ".join(f"{m.replace('firmware/', '')} {v}" for m, v in list(c["modules"].items())[:8])
         print(f"  step {c['step']} (slot {c['step'] % SLOTS}): {c['instructions']}: {parts}")
+        fparts = ", ".join(f"{f} {v}" for f, v in list(c["functions"].items())[:8])
+        print(f"    functions: {fparts}")
     if a.json:
         doc = {}
         if os.path.exists(a.json):
