@@ -66,6 +66,10 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       r->comm_tf = 0U;
       r->comm_changes = 0U;
       r->changes_last = 0U;
+      r->s3_quiet = false;
+      r->s3_act = 0U;
+      r->s3_n = 0U;
+      r->s3_changes = 0U;
       r->diag = (canfdi_dtcroute_diag_t){0};
       r->initialised = true;
       rc = CANFDI_OK;
@@ -135,23 +139,115 @@ static void p2135(canfdi_dtcroute_t *r, const canfdi_dtcroute_in_t *in, uint32_t
   }
 }
 
+/* What report() did with a report (bit flags). */
+#define REP_REJECTED 1U /* the memory refused it */
+#define REP_NOOP 2U     /* a pass that changes nothing, not given */
+
 /* One report to the memory; a pass that would change nothing
  * (canfdi_dtc_pass_is_noop: most reports of a step) is counted without the
- * call, which would return at once. */
-static int32_t report(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint8_t idx, canfdi_deb_report_t rep,
-                      const canfdi_dtc_ff_t *ff)
+ * call, which would return at once. Returns REP_* flags. */
+static uint32_t report(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint8_t idx, canfdi_deb_report_t rep,
+                       const canfdi_dtc_ff_t *ff)
 {
-  int32_t rejected = 0;
+  uint32_t out = 0U;
   canfdi_count_inc(&r->diag.reports);
   if (canfdi_dtc_pass_is_noop(dtc, idx, rep)) {
-    /* answered: the status stands */
+    out = REP_NOOP; /* answered: the status stands */
   } else if (canfdi_dtc_report(dtc, idx, rep, ff) < 0) {
     canfdi_count_inc(&r->diag.reports_rejected);
-    rejected = 1;
+    out = REP_REJECTED;
   } else {
     /* taken */
   }
-  return rejected;
+  return out;
+}
+
+/* Sources 1-2: the DTC masks fm / pm (n_agg DTCs). To a memory that has
+ * not changed since the last report, only the DTCs whose verdict changed
+ * are given; the others are counted as given (the header: a verdict given
+ * again to its DTC changes nothing). Returns the reports refused. */
+static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t fm, uint32_t pm, uint32_t n_agg,
+                               const canfdi_dtc_ff_t *ff)
+{
+  int32_t rc = 0;
+  uint32_t x = fm | pm;
+  uint32_t given = 0U;
+  if (r->agg_last_valid && dtc->cycle_active && (dtc->changes == r->changes_last)) {
+    x &= (fm ^ r->agg_last_fail) | (pm ^ r->agg_last_pass);
+  }
+  /* in DTC table order: the lowest index first (a DTC beyond the memory's
+   * table has no index, so every DTC in the masks is one of its DTCs) */
+  while (x != 0U) {
+    const uint32_t idx = (uint32_t)canfdi_ctz32(x);
+    x &= x - 1U;
+    if (idx < (uint32_t)dtc->n_dtcs) {
+      rc += ((report(r, dtc, (uint8_t)idx,
+                     (((fm >> idx) & 1U) != 0U) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, ff) &
+              REP_REJECTED) != 0U)
+                ? 1
+                : 0;
+      given++;
+    }
+  }
+  canfdi_count_add(&r->diag.reports, n_agg - given);
+  r->agg_last_fail = fm;
+  r->agg_last_pass = pm;
+  r->agg_last_valid = (rc == 0);
+  return rc;
+}
+
+/* Source 3: the monitors' reports, one per DTC they feed. A step with the
+ * same monitors passing, none failing, to a memory unchanged since a step
+ * whose reports were all passes that changed nothing is that step again:
+ * counted as given. Returns the reports refused. */
+static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const canfdi_rx_report_t *com,
+                               const canfdi_dtc_ff_t *ff)
+{
+  int32_t rc = 0;
+  const uint32_t act = com->prefailed | com->prepassed;
+  if (r->s3_quiet && (com->prefailed == 0U) && (act == r->s3_act) && dtc->cycle_active &&
+      (dtc->changes == r->s3_changes)) {
+    canfdi_count_add(&r->diag.reports, r->s3_n);
+  } else {
+    /* combined per DTC: several monitors share U1A50/U1A51, whose
+     * debouncer must see one report per step (a failure dominates); the
+     * DTCs collected as bits, then reported in table order (lowest index
+     * first) */
+    uint32_t touched = 0U;
+    uint32_t bits_failed = 0U;
+    uint32_t n = 0U;
+    uint32_t noops = 0U;
+    uint32_t j;
+    for (j = 0U; (j < (uint32_t)CANFDI_RX_MON_COUNT) && ((act >> j) != 0U); j++) {
+      const uint32_t bit = UINT32_C(1) << j;
+      const uint8_t idx = r->com_dtc[j];
+      if (((act & bit) != 0U) && (idx != CANFDI_DTC_NONE)) {
+        touched |= UINT32_C(1) << idx;
+        if ((com->prefailed & bit) != 0U) {
+          bits_failed |= UINT32_C(1) << idx;
+        }
+      }
+    }
+    while (touched != 0U) {
+      const uint32_t low = touched & ~(touched - 1U); /* the lowest set bit */
+      const uint32_t idx = (uint32_t)canfdi_ctz32(low);
+      touched &= touched - 1U;
+      if (idx < (uint32_t)dtc->n_dtcs) {
+        const uint32_t f = report(r, dtc, (uint8_t)idx,
+                                  ((bits_failed & low) != 0U) ? CANFDI_DEB_REPORT_PREFAILED
+                                                              : CANFDI_DEB_REPORT_PREPASSED,
+                                  ff);
+        rc += ((f & REP_REJECTED) != 0U) ? 1 : 0;
+        noops += ((f & REP_NOOP) != 0U) ? 1U : 0U;
+        n++;
+      }
+    }
+    r->s3_quiet = (noops == n);
+    r->s3_act = act;
+    r->s3_n = n;
+  }
+  r->s3_changes = dtc->changes;
+  return rc;
 }
 
 int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
@@ -164,10 +260,6 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
     uint32_t fm;
     uint32_t pm;
     uint32_t n_agg;
-    uint32_t act;
-    uint32_t touched = 0U;
-    uint32_t bits_failed = 0U;
-    uint32_t j;
     rc = 0;
     combine_faults(r, failed, (in->passed & ~failed) & FAULT_IDS);
     fm = r->src1_fail;
@@ -179,53 +271,10 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
       p2135(r, in, &fm, &pm);
       n_agg += (!had && (((fm | pm) & bit) != 0U)) ? 1U : 0U;
     }
-    if (r->agg_last_valid && dtc->cycle_active && (dtc->changes == r->changes_last) &&
-        (fm == r->agg_last_fail) && (pm == r->agg_last_pass)) {
-      /* the same verdicts to an unchanged memory: nothing would change
-       * (the header); counted as given (a DTC beyond the memory's table
-       * has no index, so every entry counted is one of its DTCs) */
-      canfdi_count_add(&r->diag.reports, n_agg);
-    } else {
-      /* in DTC table order: the lowest index first */
-      uint32_t x = fm | pm;
-      while (x != 0U) {
-        const uint32_t idx = (uint32_t)canfdi_ctz32(x);
-        x &= x - 1U;
-        if (idx < (uint32_t)dtc->n_dtcs) {
-          rc += report(r, dtc, (uint8_t)idx,
-                       (((fm >> idx) & 1U) != 0U) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, in->ff);
-        }
-      }
-      r->agg_last_fail = fm;
-      r->agg_last_pass = pm;
-      r->agg_last_valid = (rc == 0);
-    }
+    rc += report_verdicts(r, dtc, fm, pm, n_agg, in->ff);
     r->changes_last = dtc->changes;
-    /* Source 3: the input supervision's monitors (raw per-step results),
-     * combined per DTC: several monitors share U1A50/U1A51, whose
-     * debouncer must see one report per step (a failure dominates). The
-     * DTCs to report are collected as bits, then reported in table order
-     * (lowest index first). */
-    act = in->com->prefailed | in->com->prepassed;
-    for (j = 0U; (j < (uint32_t)CANFDI_RX_MON_COUNT) && ((act >> j) != 0U); j++) {
-      const uint32_t bit = UINT32_C(1) << j;
-      const uint8_t idx = r->com_dtc[j];
-      if (((act & bit) != 0U) && (idx != CANFDI_DTC_NONE)) {
-        touched |= UINT32_C(1) << idx;
-        if ((in->com->prefailed & bit) != 0U) {
-          bits_failed |= UINT32_C(1) << idx;
-        }
-      }
-    }
-    while (touched != 0U) {
-      const uint32_t low = touched & ~(touched - 1U); /* the lowest set bit */
-      const uint32_t idx = (uint32_t)canfdi_ctz32(low);
-      touched &= touched - 1U;
-      if (idx < (uint32_t)dtc->n_dtcs) {
-        rc += report(r, dtc, (uint8_t)idx,
-                     ((bits_failed & low) != 0U) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED, in->ff);
-      }
-    }
+    /* Source 3: the input supervision's monitors (raw per-step results) */
+    rc += report_monitors(r, dtc, in->com, in->ff);
     canfdi_count_inc(&r->diag.steps);
   }
   return rc;

@@ -26,14 +26,22 @@
  * The DTC table index of every fault, monitor and of P2135 is looked up
  * once at init (a linear search per code), so a step costs no search.
  * Sources 1 and 2 give PASSED or FAILED, which the DTC memory's debouncer
- * takes at once; reported again to a memory that has not changed since
- * (its `changes` counter, which every status and clear and cycle moves),
- * the same verdicts change nothing: such a step counts them as reported
- * and gives them no second time (a steady state, most steps). This holds
- * because no other source reports their codes in between: the diagnosis
- * gives no verdict for the communication faults and the manager detects
- * none of them, so the U-codes are source 3's alone (a PREPASSED moves a
- * debounce counter without moving `changes`).
+ * takes at once. A verdict given again to its DTC, in the same operation
+ * cycle and with no clear in between, changes nothing: a second FAILED
+ * finds the code failed, stored or not (a code displaced from the memory is
+ * not stored again before its next failure), a second PASSED finds it
+ * passed. So to a memory that has not changed since the last report (its
+ * `changes` counter, which every status, clear and cycle moves) a step
+ * gives only the DTCs whose verdict changed, and counts the others as
+ * reported (most steps give none). This holds because no other source
+ * reports their codes in between: the diagnosis gives no verdict for the
+ * communication faults and the manager detects none of them, so the
+ * U-codes are source 3's alone (a PREPASSED moves a debounce counter
+ * without moving `changes`). Source 3's PREPASSED reports step their
+ * codes' debouncers towards the pass threshold; once a step's reports are
+ * all passes that change nothing (canfdi_dtc_pass_is_noop), the next step
+ * with the same monitors passing, none failing, and the memory unchanged
+ * is the same step again, and is counted as reported without them.
  *
  * Faults for the manager (canfdi_dtcroute_manager_faults): a communication
  * fault while its trouble code has testFailed (qualified by the DTC memory's
@@ -51,18 +59,19 @@
  * (uint16_t, stops at p2135_steps) and the saturating counters.
  * Cost per canfdi_dtcroute_step: source 1's DTC masks only when the fault
  * masks differ from the last step's (then two table reads per fault with a
- * verdict); a compare of the two DTC masks with the last reported ones; a
- * report per DTC with a verdict only when they or the memory changed (32
- * at most, each a canfdi_dtc_report; a pass that would change nothing,
- * canfdi_dtc_pass_is_noop, is counted without the call); the monitor bits
- * up to the highest one set (20 at most) and one report per DTC they feed
- * (collected as a bit mask, reported lowest index first).
+ * verdict); a report per DTC whose verdict changed, or per DTC with a
+ * verdict when the memory changed (32 at most, each a canfdi_dtc_report; a
+ * pass that would change nothing, canfdi_dtc_pass_is_noop, is counted
+ * without the call); for source 3 a few compares in the steady state,
+ * else the monitor bits up to the highest one set (20 at most) and one
+ * report per DTC they feed (collected as a bit mask, reported lowest
+ * index first).
  * manager_faults: a few mask operations, and a status read per
  * communication fault when the memory changed since the last call.
- * Memory: sizeof(canfdi_dtcroute_t) = 164 bytes on a 32-bit target (the
+ * Memory: sizeof(canfdi_dtcroute_t) = 176 bytes on a 32-bit target (the
  * index tables 64 + 20, the fault masks, source 1's last inputs and
- * masks, the last reported masks, the communication faults' testFailed,
- * state, config, diagnostics). No heap.
+ * masks, the last reported masks, source 3's last pass, the communication
+ * faults' testFailed, state, config, diagnostics). No heap.
  */
 #ifndef CANFDI_DTCROUTE_H
 #define CANFDI_DTCROUTE_H
@@ -113,6 +122,10 @@ typedef struct {
   uint32_t changes_last; /* dtc->changes after they were last reported */
   uint32_t comm_tf;      /* the communication faults with testFailed */
   uint32_t comm_changes; /* dtc->changes when comm_tf was read */
+  uint32_t s3_act;       /* source 3: the monitors that ran in its last pass */
+  uint32_t s3_n;         /* the reports that pass gave */
+  uint32_t s3_changes;   /* dtc->changes after the last step's source 3 */
+  bool s3_quiet;         /* that pass: passes only, none changed anything */
   bool src1_valid;
   bool agg_last_valid;
   bool comm_valid;
