@@ -57,6 +57,25 @@ const uint32_t canfdi_recip_seed[257] = {
     0x81018408U, 0x80C0A1B2U, 0x80800080U, 0x803FA010U, 0x7FFF8000U
 };
 
+/* ARMv6-M with GCC: canfdi_smull32_h16 and canfdi_mul_s56_q31_rnd_h16, the
+ * products the step calls most (~100 and ~60 times), in Thumb-1 assembly:
+ * signed 16-bit high halves, so that every partial product fits 32 bits
+ * with its sign, and the 64-bit sums carried with ADCS, which C cannot
+ * express (the C forms below take ~30 and ~85 instructions, these 22 and
+ * 52). The same bits as the C forms, which are the portable reference
+ * (tests/unit/test_fixp.c on the host); the PIL images check both against
+ * the compiler's own 64-bit products on the target (tests/pil/pil_step.c)
+ * before every replay. Naked (no compiler prologue): each pushes the
+ * registers it uses above r3, 8 and 16 bytes, which tests/pil/footprint.py
+ * adds to the stack's worst case (its ASM_FRAMES). GCC reads Thumb-1
+ * inline assembly in divided syntax: each block switches to unified and
+ * back. */
+#if defined(__ARM_ARCH_6M__) && defined(__GNUC__)
+#define CANFDI_FIXP_V6M_ASM 1
+#else
+#define CANFDI_FIXP_V6M_ASM 0
+#endif
+
 /* The 32x32->64 products from 16-bit halves (canfdi_fixp.h). */
 
 /* Unsigned: "mid" <= 2^32 - 1. */
@@ -91,6 +110,40 @@ uint32_t canfdi_umulhi32_h16(uint32_t a, uint32_t b)
  * 32-bit words: no 64-bit addition, which ARMv6-M builds from carries. The
  * unsigned words are canfdi_umull32_h16's, written out here rather than
  * called: this product runs ~185 times a step. */
+#if CANFDI_FIXP_V6M_ASM
+/* a = ah 2^16 + al, b = bh 2^16 + bl with ah, bh signed and al, bl
+ * unsigned: a b = ah bh 2^32 + (ah bl + al bh) 2^16 + al bl, each middle
+ * product added as its word shifted left (low) and arithmetically right
+ * (high) with the carry. a in r0, b in r1; a b in r1:r0. */
+__attribute__((naked)) int64_t canfdi_smull32_h16(int32_t a __attribute__((unused)), int32_t b __attribute__((unused)))
+{
+  __asm__ volatile(
+      ".syntax unified\n\t"
+      "push {r4, r5}\n\t"
+      "asrs r2, r0, #16\n\t" /* ah, signed */
+      "uxth r0, r0\n\t"      /* al */
+      "asrs r3, r1, #16\n\t" /* bh, signed */
+      "uxth r1, r1\n\t"      /* bl */
+      "movs r4, r0\n\t"
+      "muls r4, r1\n\t"      /* al bl: low word, unsigned */
+      "muls r1, r2\n\t"      /* ah bl, signed */
+      "muls r0, r3\n\t"      /* al bh, signed */
+      "muls r3, r2\n\t"      /* ah bh: high word, signed */
+      "lsls r5, r1, #16\n\t"
+      "asrs r1, r1, #16\n\t"
+      "adds r4, r4, r5\n\t"
+      "adcs r3, r1\n\t"
+      "lsls r5, r0, #16\n\t"
+      "asrs r0, r0, #16\n\t"
+      "adds r4, r4, r5\n\t"
+      "adcs r3, r0\n\t"
+      "movs r0, r4\n\t"
+      "movs r1, r3\n\t"
+      "pop {r4, r5}\n\t"
+      "bx lr\n\t"
+      ".syntax divided\n\t");
+}
+#else
 int64_t canfdi_smull32_h16(int32_t a, int32_t b)
 {
   const uint32_t ua = (uint32_t)a;
@@ -106,6 +159,7 @@ int64_t canfdi_smull32_h16(int32_t a, int32_t b)
   const uint32_t hi = ((ah * bh) + (lh >> 16) + (mid >> 16)) - corr;
   return canfdi_wrap_u64_to_s64(((uint64_t)hi << 32) | ((mid << 16) | (ll & 0xFFFFU)));
 }
+#endif
 
 /* Unsigned times signed: the unsigned product of a and b's bit pattern,
  * less a 2^32 when b < 0 (modulo 2^64); a b lies in [-2^63, 2^64 / 2). */
@@ -121,6 +175,72 @@ int64_t canfdi_usmull32_h16(uint32_t a, int32_t b)
  * unsigned product less al 2^32 when g < 0); al g (|al g| < 2^63) is
  * shifted by 31 on its two words, and the sum is carried word by word.
  * |ah| <= 2^24, so |2 ah g| <= 2^56 and nothing wraps. */
+#if CANFDI_FIXP_V6M_ASM
+/* The same identity as the C form: 2 ah g + floor(al g / 2^31) + bit 30 of
+ * al g, with ah g (signed halves) and al g (al's halves unsigned, g's high
+ * half signed) each built as in canfdi_smull32_h16. a in r1:r0, g in r2;
+ * the result in r1:r0. */
+__attribute__((naked)) int64_t canfdi_mul_s56_q31_rnd_h16(int64_t a __attribute__((unused)), int32_t g __attribute__((unused)))
+{
+  __asm__ volatile(
+      ".syntax unified\n\t"
+      "push {r4, r5, r6, r7}\n\t"
+      /* H = ah g (ah = r1, signed; g = r2) into r7:r6 */
+      "asrs r3, r1, #16\n\t"
+      "uxth r1, r1\n\t"
+      "asrs r4, r2, #16\n\t"
+      "uxth r5, r2\n\t"
+      "movs r6, r1\n\t"
+      "muls r6, r5\n\t"
+      "movs r7, r3\n\t"
+      "muls r7, r4\n\t"
+      "muls r1, r4\n\t"
+      "muls r3, r5\n\t"
+      "lsls r2, r3, #16\n\t"
+      "asrs r3, r3, #16\n\t"
+      "adds r6, r6, r2\n\t"
+      "adcs r7, r3\n\t"
+      "lsls r2, r1, #16\n\t"
+      "asrs r1, r1, #16\n\t"
+      "adds r6, r6, r2\n\t"
+      "adcs r7, r1\n\t"
+      /* 2 H */
+      "adds r6, r6, r6\n\t"
+      "adcs r7, r7\n\t"
+      /* X = al g (al = r0, unsigned) into r3:r2 */
+      "lsrs r1, r0, #16\n\t"
+      "uxth r0, r0\n\t"
+      "movs r2, r0\n\t"
+      "muls r2, r5\n\t"
+      "movs r3, r1\n\t"
+      "muls r3, r4\n\t"
+      "muls r0, r4\n\t"
+      "muls r1, r5\n\t"
+      "lsls r4, r1, #16\n\t"
+      "lsrs r1, r1, #16\n\t"
+      "adds r2, r2, r4\n\t"
+      "adcs r3, r1\n\t"
+      "lsls r4, r0, #16\n\t"
+      "asrs r0, r0, #16\n\t"
+      "adds r2, r2, r4\n\t"
+      "adcs r3, r0\n\t"
+      /* 2 H + floor(X / 2^31) + bit 30 of X */
+      "lsrs r0, r2, #31\n\t"
+      "lsls r1, r3, #1\n\t"
+      "orrs r0, r1\n\t"
+      "asrs r1, r3, #31\n\t"
+      "adds r0, r0, r6\n\t"
+      "adcs r1, r7\n\t"
+      "lsls r2, r2, #1\n\t"
+      "lsrs r2, r2, #31\n\t"
+      "movs r3, #0\n\t"
+      "adds r0, r0, r2\n\t"
+      "adcs r1, r3\n\t"
+      "pop {r4, r5, r6, r7}\n\t"
+      "bx lr\n\t"
+      ".syntax divided\n\t");
+}
+#else
 int64_t canfdi_mul_s56_q31_rnd_h16(int64_t a, int32_t g)
 {
   const uint64_t ua = (uint64_t)a;
@@ -170,6 +290,7 @@ int64_t canfdi_mul_s56_q31_rnd_h16(int64_t a, int32_t g)
   rh += (s < rl) ? 1U : 0U;
   return canfdi_wrap_u64_to_s64(((uint64_t)rh << 32) | s);
 }
+#endif
 
 /* |x| as an unsigned value; exact for INT32_MIN (2^31). */
 static uint32_t mag_u32(int32_t x)

@@ -222,8 +222,11 @@ static inline int64_t canfdi_asr64_rnd(int64_t x, unsigned n)
  * one copy each: inline they would grow every caller) build the product
  * from four 16x16->32 multiplies instead (20 to 40 instructions with the
  * call), and are what canfdi_umull32, canfdi_umulhi32, canfdi_smull32 and
- * canfdi_usmull32 use there. Both forms are exact, so every core gives the same bits
- * (tests/unit/test_fixp checks the halves against the host's products).
+ * canfdi_usmull32 use there; with GCC the signed product and
+ * canfdi_mul_s56_q31_rnd_h16 are Thumb-1 assembly there (canfdi_fixp.c).
+ * Both forms are exact, so every core gives the same bits
+ * (tests/unit/test_fixp checks the C halves against the host's products,
+ * the PIL images every form against the target compiler's).
  * Scaling and overflow: exact, cannot overflow (stated with each
  * definition in canfdi_fixp.c).
  */

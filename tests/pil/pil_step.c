@@ -21,6 +21,13 @@
  * addresses, and the bytes never touched between them); exits 1 when a frame
  * differs, 2 when the run cannot start, 3 when the stack and the heap met
  * (the run's results are then not to be trusted).
+ * Before the replay it checks the out-of-line 32x32->64 products of
+ * core/canfdi_fixp.c (the *_h16 forms: Thumb-1 assembly on ARMv6-M, C
+ * elsewhere) against the compiler's own 64-bit products on edge values and
+ * pseudo-random operands, and prints
+ *   pil: products N checked D differ
+ * exiting 4 when one differs: the replay compares only the operands the
+ * scenario happens to produce.
  *
  * Built with PIL_COST (`make pil-cost`, tests/pil/pil_cost.py) it reads
  * the log fuzz_app_rx's inputs were written to (tests/fuzz/fuzz_export.h):
@@ -335,6 +342,70 @@ static __attribute__((noinline)) int32_t app_init(void)
   return canfdi_app_init(&app, &cal, 0U);
 }
 
+/* The *_h16 products against the compiler's 64-bit products (libgcc's
+ * __aeabi_lmul on ARMv6-M, SMULL/UMULL elsewhere): every pair of the edge
+ * values and PRODUCT_RANDOM pseudo-random pairs (xorshift32; for the
+ * 56-bit form the first operand shifted down to a random width). Returns
+ * the number of results that differ; *checked counts the comparisons. */
+#define PRODUCT_RANDOM 4000U
+static uint32_t prng = 0x2545F491U;
+static uint32_t next_u32(void)
+{
+  prng ^= prng << 13;
+  prng ^= prng >> 17;
+  prng ^= prng << 5;
+  return prng;
+}
+
+static uint32_t check_pair(uint32_t x, uint32_t y, int64_t a56)
+{
+  const int32_t sx = (int32_t)x;
+  const int32_t sy = (int32_t)y;
+  const uint64_t up = (uint64_t)x * (uint64_t)y;
+  /* round(a g / 2^31) half up: a = ah 2^32 + al, exact in 64 bits because
+   * |ah| <= 2^24 (the function's domain) */
+  const int32_t ah = (int32_t)(a56 >> 32);
+  const int64_t alg = (int64_t)(uint64_t)(uint32_t)a56 * (int64_t)sy;
+  const int64_t r56 = (2 * ((int64_t)ah * (int64_t)sy)) + ((alg + (1LL << 30)) >> 31);
+  uint32_t bad = 0U;
+  bad += (canfdi_umull32_h16(x, y) != up) ? 1U : 0U;
+  bad += (canfdi_umulhi32_h16(x, y) != (uint32_t)(up >> 32)) ? 1U : 0U;
+  bad += (canfdi_smull32_h16(sx, sy) != ((int64_t)sx * (int64_t)sy)) ? 1U : 0U;
+  bad += (canfdi_usmull32_h16(x, sy) != ((int64_t)x * (int64_t)sy)) ? 1U : 0U;
+  bad += (canfdi_mul_s56_q31_rnd_h16(a56, sy) != r56) ? 1U : 0U;
+  return bad;
+}
+
+static __attribute__((noinline)) uint32_t check_products(uint32_t *checked)
+{
+  static const uint32_t edge[] = {0U,          1U,          2U,          0x7FFFU,     0x8000U,
+                                  0xFFFFU,     0x10000U,    0x12345678U, 0x7FFFFFFFU, 0x80000000U,
+                                  0x80000001U, 0xFFFF0000U, 0xFFFF8000U, 0xFFFFFFFEU, 0xFFFFFFFFU};
+  static const int64_t edge56[] = {0, 1, -1, (1LL << 56) - 1, -(1LL << 56), 0x00FFFF00FFFF0000LL,
+                                   -0x0000FFFF00000001LL, 0x7FFFFFFFLL, -0x80000000LL};
+  const uint32_t ne = (uint32_t)(sizeof edge / sizeof edge[0]);
+  const uint32_t n56 = (uint32_t)(sizeof edge56 / sizeof edge56[0]);
+  uint32_t bad = 0U;
+  uint32_t i;
+  uint32_t j;
+  *checked = 0U;
+  for (i = 0U; i < ne; i++) {
+    for (j = 0U; j < ne; j++) {
+      bad += check_pair(edge[i], edge[j], edge56[(i + j) % n56]);
+      *checked += 5U;
+    }
+  }
+  for (i = 0U; i < PRODUCT_RANDOM; i++) {
+    const uint32_t x = next_u32();
+    const uint32_t y = next_u32();
+    const int64_t w = (int64_t)(((uint64_t)next_u32() << 32) | next_u32());
+    const int64_t a56 = w >> (7U + (next_u32() % 57U)); /* |a| <= 2^56 */
+    bad += check_pair(x, y, a56);
+    *checked += 5U;
+  }
+  return bad;
+}
+
 int main(void)
 {
   static char line[128];
@@ -346,6 +417,16 @@ int main(void)
   SYST_RVR = 0x00FFFFFFU;
   SYST_CVR = 0U;
   SYST_CSR = 0x5U; /* core clock, enabled, no interrupt */
+  {
+    uint32_t checked;
+    const uint32_t bad = check_products(&checked);
+    out_kv("pil: products ", checked);
+    out_kv(" checked ", bad);
+    out_s(" differ\n");
+    if (bad != 0U) {
+      finish("pil: an out-of-line product differs from the compiler's\n", 4);
+    }
+  }
   if (app_init() != CANFDI_OK) {
     finish("pil: init failed\n", 2);
   }
