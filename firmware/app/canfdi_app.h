@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      16 397   18 296   25 678
- *   Cortex-M4 (an386)      16 398   18 299   25 686
+ *   Cortex-M3 (an385)      15 880   17 778   25 160
+ *   Cortex-M4 (an386)      15 880   17 781   25 168
  *   Cortex-M0 (microbit)   30 235   34 592   47 896
- * and at most 25 867 (M4) / 50 287 (M0) over the PIL scenarios (the step
+ * and at most 25 350 (M4) / 50 287 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -126,14 +126,14 @@
  * roughly 40 MHz or more with margin (the worst step at ~1.2 cycles per
  * instruction: 32 MHz for the whole millisecond); on a Cortex-M0 at
  * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
- * halves, core/canfdi_fixp.h, and runs ~1.9 times the M4's count).
+ * halves, core/canfdi_fixp.h, and runs ~2.0 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 22 700 (M4) / 43 500
- * (M0) in those steps, within the same run's maxima (25 400 / 47 200).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 22 200 (M4) / 43 500
+ * (M0) in those steps, within the same run's maxima (24 800 / 47 200).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 25 867 / 50 287,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 25 350 / 50 287,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less

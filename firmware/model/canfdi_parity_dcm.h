@@ -233,11 +233,12 @@
  * per module and function (build/bench/pil_profile.json; the SVF steps,
  * the thresholds and the 64-bit helpers are counted under canfdi_svf,
  * canfdi_adapt, canfdi_fixp, canfdi_intrin and libgcc there): in the
- * dcm_ia_offset scenario this module's own code took 2 650 instructions
- * per step on average on Cortex-M4 and 5 480 on Cortex-M0.
- * Most of it is the four third-order SVFs and 64-bit arithmetic, which
- * ARMv6-M lacks. Code (`make footprint`, the application image): 5.7 kB
- * (M4), 7.0 kB (M0) plus canfdi_svf, adapt and fixp. Memory: sizeof(canfdi_parity_dcm_t) = 792
+ * dcm_ia_offset scenario this module's own code took 1 900 instructions
+ * per step on average on Cortex-M4 (the coefficient terms inline there)
+ * and 4 300 on Cortex-M0 (one copy of them, a call each).
+ * Most of it is the coefficient terms' 64-bit arithmetic, which ARMv6-M
+ * lacks. Code (`make footprint`, the application image): 8.6 kB (M4),
+ * 7.0 kB (M0) plus canfdi_svf, adapt and fixp. Memory: sizeof(canfdi_parity_dcm_t) = 792
  * bytes on a 32-bit target (4 SVFs 320, 4 thresholds 160, coefficients,
  * state), caller-owned; the configuration (168 bytes) is caller-owned and
  * must outlive the instance. No heap, no globals, no floating point;
