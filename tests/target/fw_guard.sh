@@ -20,7 +20,8 @@
 #     from checks 1-2. Excluded: cantools-generated *_is_in_phys_range(), which
 #     take a `double` by construction and must never be called in firmware
 #     (dbc/README.md), so they must be garbage-collected, not linked;
-#  4. every `static inline` function of a firmware header is referenced in the
+#  4. every `static inline` function of a firmware header (also those declared
+#     with the CANFDI_*INLINE macros) is referenced in the
 #     entry point (inline code lands in the caller, so only a call checks it);
 #  5. no `float`/`double` keyword in firmware sources outside comments and
 #     string literals (the generated *_is_in_phys_range(double) lines are
@@ -135,7 +136,7 @@ for h in $HEADERS; do
     grep -qw -- "$fn" <<<"$main_txt" || unref+=("$fn ($h)")
   done < <(strip_c "$h" | perl -0777 -ne '
       s/__attribute__\s*\(\(.*?\)\)//gs;
-      while (/\b(?:static\s+inline|inline\s+static|static\s+__inline__|static\s+__inline)\b[^;{}()]*?\b([A-Za-z_]\w*)\s*\(/g) { print "$1\n" }')
+      while (/\b(?:static\s+inline|inline\s+static|static\s+__inline__|static\s+__inline|static\s+CANFDI_\w*INLINE)\b[^;{}()]*?\b([A-Za-z_]\w*)\s*\(/g) { print "$1\n" }')
 done
 if ((${#unref[@]})); then
   fail "static inline function(s) not referenced in $MAIN: ${unref[*]}"
