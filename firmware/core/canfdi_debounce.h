@@ -149,6 +149,30 @@ int32_t canfdi_debounce_init(canfdi_debounce_t *d, const canfdi_debounce_cfg_t *
  */
 int32_t canfdi_debounce_step(canfdi_debounce_t *d, canfdi_deb_report_t report);
 
+/*
+ * Whether a pass (PASSED or PREPASSED) would change nothing: the counter on
+ * the pass threshold, the status PASSED, test_failed and
+ * test_not_completed_this_cycle clear. canfdi_debounce_step would then
+ * write the same values back and return CANFDI_DEB_PASSED. false for NULL,
+ * an unbound instance or any other report. Cost: a few compares, inline.
+ */
+static inline bool canfdi_debounce_pass_is_noop(const canfdi_debounce_t *d, canfdi_deb_report_t report)
+{
+  return ((report == CANFDI_DEB_REPORT_PASSED) || (report == CANFDI_DEB_REPORT_PREPASSED)) && (d != NULL) &&
+         (d->cfg != NULL) && (d->counter == d->cfg->passed_threshold) &&
+         (d->status == (uint8_t)CANFDI_DEB_PASSED) && !d->test_failed && !d->test_not_completed_this_cycle;
+}
+
+/*
+ * canfdi_debounce_step with a pass that changes nothing answered inline
+ * (CANFDI_DEB_PASSED, no call): the same result and the same state. Most
+ * reports of a step are this one (a healthy monitor passes again).
+ */
+static inline int32_t canfdi_debounce_report(canfdi_debounce_t *d, canfdi_deb_report_t report)
+{
+  return canfdi_debounce_pass_is_noop(d, report) ? (int32_t)CANFDI_DEB_PASSED : canfdi_debounce_step(d, report);
+}
+
 /* New operation cycle: counter 0, test_failed_this_cycle false,
  * test_not_completed_this_cycle true; status and test_failed kept.
  * No-op on NULL or an unbound instance. Cost: O(1), a few stores. */

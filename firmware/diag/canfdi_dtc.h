@@ -371,9 +371,7 @@ static inline bool canfdi_dtc_pass_is_noop(const canfdi_dtc_t *m, uint8_t index,
   if (((report == CANFDI_DEB_REPORT_PASSED) || (report == CANFDI_DEB_REPORT_PREPASSED)) && (m != NULL) &&
       (m->table != NULL) && m->cycle_active && (index < m->n_dtcs)) {
     const canfdi_dtc_state_t *st = &m->dtc[index];
-    const canfdi_debounce_t *d = &st->deb;
-    r = (d->cfg != NULL) && (d->counter == d->cfg->passed_threshold) && (d->status == (uint8_t)CANFDI_DEB_PASSED) &&
-        !d->test_failed && !d->test_not_completed_this_cycle &&
+    r = canfdi_debounce_pass_is_noop(&st->deb, report) &&
         ((st->status & (CANFDI_DTC_ST_TF | CANFDI_DTC_ST_TNCSLC | CANFDI_DTC_ST_TNCTOC)) == 0U);
   }
   return r;

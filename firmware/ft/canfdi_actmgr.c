@@ -195,7 +195,7 @@ static void check_bridge(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in)
 
   if (evaluate) {
     const uint32_t b = (uint32_t)bridge - 1U; /* bridge is A or B here */
-    const int32_t st = canfdi_debounce_step(
+    const int32_t st = canfdi_debounce_report(
         &m->bridge_deb[b], explained ? CANFDI_DEB_REPORT_PREPASSED : CANFDI_DEB_REPORT_PREFAILED);
     CANFDI_ASSERT(st >= 0);
     if (!explained) {
@@ -333,7 +333,7 @@ static void step_thr(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
   int32_t vst;
   bool off;
 
-  vst = canfdi_debounce_step(&m->vote_deb, vote->valid ? CANFDI_DEB_REPORT_PREPASSED
+  vst = canfdi_debounce_report(&m->vote_deb, vote->valid ? CANFDI_DEB_REPORT_PREPASSED
                                                         : CANFDI_DEB_REPORT_PREFAILED);
   CANFDI_ASSERT(vst >= 0);
 

@@ -164,7 +164,7 @@ static void report_all(canfdi_vote_t *v, uint8_t avail, uint8_t outlier, canfdi_
     const uint8_t bit = (uint8_t)(1U << s);
     if ((avail & bit) != 0U) {
       const bool bad = (outlier & bit) != 0U;
-      const int32_t st = canfdi_debounce_step(
+      const int32_t st = canfdi_debounce_report(
           &v->deb[s], bad ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED);
       CANFDI_ASSERT(st >= 0);
       if (bad && (st == (int32_t)CANFDI_DEB_FAILED)) {

@@ -178,6 +178,8 @@ static void guard_debounce(void)
   sink32(canfdi_debounce_cfg_check(&cfg));
   sink32(canfdi_debounce_init(&deb, &cfg));
   sink32(canfdi_debounce_step(&deb, (canfdi_deb_report_t)in_u32));
+  sink32(canfdi_debounce_report(&deb, (canfdi_deb_report_t)in_u32));
+  sink32(canfdi_debounce_pass_is_noop(&deb, (canfdi_deb_report_t)in_u32) ? 1 : 0);
   canfdi_debounce_start_cycle(&deb);
   sink32((int32_t)canfdi_debounce_status(&deb));
   sink32(canfdi_debounce_counter(&deb));

@@ -433,6 +433,76 @@ START_TEST(test_random_against_reference)
 }
 END_TEST
 
+/* Every field of two instances equal. */
+static bool deb_eq(const canfdi_debounce_t *a, const canfdi_debounce_t *b)
+{
+  return (a->cfg == b->cfg) && (a->counter == b->counter) && (a->status == b->status) &&
+         (a->test_failed == b->test_failed) && (a->test_failed_this_cycle == b->test_failed_this_cycle) &&
+         (a->test_not_completed_this_cycle == b->test_not_completed_this_cycle) &&
+         (a->diag.failed_qualifications == b->diag.failed_qualifications) &&
+         (a->diag.passed_qualifications == b->diag.passed_qualifications) &&
+         (a->diag.rejected_reports == b->diag.rejected_reports);
+}
+
+/* canfdi_debounce_report (a settled pass answered inline) against
+ * canfdi_debounce_step on two copies: the same result and the same state
+ * after every report, through random configurations, reports and cycles;
+ * and where canfdi_debounce_pass_is_noop holds, the full step changes
+ * nothing and returns PASSED. Both answers are seen many times. */
+START_TEST(test_report_inline_pass)
+{
+  int cfg_i;
+  uint32_t noops = 0U;
+  uint32_t passes_not_noop = 0U;
+  lcg_state = 777U + (uint32_t)_i;
+  for (cfg_i = 0; cfg_i < 200; cfg_i++) {
+    canfdi_debounce_cfg_t c;
+    canfdi_debounce_t a;
+    canfdi_debounce_t b;
+    int n;
+    c.failed_threshold = (int16_t)(1 + (int32_t)(lcg() % 30U));
+    c.passed_threshold = (int16_t)(-1 - (int32_t)(lcg() % 30U));
+    c.prefailed_step = (uint16_t)(1U + lcg() % 12U);
+    c.prepassed_step = (uint16_t)(1U + lcg() % 12U);
+    c.jump_up = (lcg() & 1U) != 0U;
+    c.jump_down = (lcg() & 1U) != 0U;
+    c.jump_up_value = (int16_t)(c.passed_threshold +
+                                (int32_t)(lcg() % (uint32_t)(c.failed_threshold - c.passed_threshold + 1)));
+    c.jump_down_value = (int16_t)(c.passed_threshold +
+                                  (int32_t)(lcg() % (uint32_t)(c.failed_threshold - c.passed_threshold + 1)));
+    ck_assert_int_eq(canfdi_debounce_init(&a, &c), CANFDI_OK);
+    ck_assert_int_eq(canfdi_debounce_init(&b, &c), CANFDI_OK);
+    for (n = 0; n < 400; n++) {
+      const uint32_t u = lcg() % 32U;
+      const canfdi_deb_report_t rep = (u == 0U)   ? CANFDI_DEB_REPORT_FAILED
+                                      : (u == 1U) ? CANFDI_DEB_REPORT_PASSED
+                                      : (u < 6U)  ? CANFDI_DEB_REPORT_PREFAILED
+                                                  : CANFDI_DEB_REPORT_PREPASSED;
+      const bool noop = canfdi_debounce_pass_is_noop(&a, rep);
+      const canfdi_debounce_t before = a;
+      const int32_t sa = canfdi_debounce_report(&a, rep);
+      const int32_t sb = canfdi_debounce_step(&b, rep);
+      ck_assert_int_eq(sa, sb);
+      ck_assert(deb_eq(&a, &b));
+      if (noop) {
+        noops++;
+        ck_assert_int_eq(sb, (int32_t)CANFDI_DEB_PASSED);
+        ck_assert(deb_eq(&b, &before));
+      } else if ((rep == CANFDI_DEB_REPORT_PASSED) || (rep == CANFDI_DEB_REPORT_PREPASSED)) {
+        passes_not_noop++;
+      }
+      if ((lcg() % 97U) == 0U) {
+        canfdi_debounce_start_cycle(&a);
+        canfdi_debounce_start_cycle(&b);
+      }
+    }
+  }
+  ck_assert_uint_gt(noops, 1000U);
+  ck_assert_uint_gt(passes_not_noop, 1000U);
+  ck_assert(!canfdi_debounce_pass_is_noop(NULL, CANFDI_DEB_REPORT_PASSED));
+}
+END_TEST
+
 static Suite *make_suite(void)
 {
   Suite *s = suite_create("debounce");
@@ -463,6 +533,7 @@ static Suite *make_suite(void)
 
   tc = tcase_create("reference");
   tcase_add_loop_test(tc, test_random_against_reference, 0, 4);
+  tcase_add_loop_test(tc, test_report_inline_pass, 0, 4);
   suite_add_tcase(s, tc);
   return s;
 }
