@@ -113,10 +113,10 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      15 880   17 778   25 160
- *   Cortex-M4 (an386)      15 880   17 781   25 168
- *   Cortex-M0 (microbit)   30 235   34 592   47 896
- * and at most 25 350 (M4) / 50 287 (M0) over the PIL scenarios (the step
+ *   Cortex-M3 (an385)      15 395   17 165   24 468
+ *   Cortex-M4 (an386)      15 395   17 169   24 478
+ *   Cortex-M0 (microbit)   30 157   34 354   47 611
+ * and at most 24 481 (M4) / 49 990 (M0) over the PIL scenarios (the step
  * in which dcm_ia_offset's fault is isolated: the model rules' matching
  * with symptoms present, the trouble codes stored and sent, an RLS
  * update). Where the instructions go, per module, per slot of the rate
@@ -130,10 +130,10 @@
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 22 200 (M4) / 43 500
- * (M0) in those steps, within the same run's maxima (24 800 / 47 200).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 21 600 (M4) / 43 200
+ * (M0) in those steps, within the same run's maxima (24 200 / 47 000).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 25 350 / 50 287,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 24 481 / 49 990,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
