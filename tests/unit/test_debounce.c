@@ -392,6 +392,22 @@ static void ref_step(ref_t *r, const canfdi_debounce_cfg_t *cfg, canfdi_deb_repo
   }
 }
 
+/* A random valid configuration: small thresholds and steps, or (big) the
+ * extremes of the int16 domain; jumps on or off, anywhere in the band. */
+static void random_cfg(canfdi_debounce_cfg_t *c, bool big)
+{
+  c->failed_threshold = (int16_t)(big ? INT16_MAX - (int32_t)(lcg() % 100U) : 1 + (int32_t)(lcg() % 30U));
+  c->passed_threshold = (int16_t)(big ? INT16_MIN + (int32_t)(lcg() % 100U) : -1 - (int32_t)(lcg() % 30U));
+  c->prefailed_step = (uint16_t)(big ? 1U + lcg() % 32767U : 1U + lcg() % 12U);
+  c->prepassed_step = (uint16_t)(big ? 1U + lcg() % 32767U : 1U + lcg() % 12U);
+  c->jump_up = (lcg() & 1U) != 0U;
+  c->jump_down = (lcg() & 1U) != 0U;
+  c->jump_up_value = (int16_t)(c->passed_threshold +
+                               (int32_t)(lcg() % (uint32_t)(c->failed_threshold - c->passed_threshold + 1)));
+  c->jump_down_value = (int16_t)(c->passed_threshold +
+                                 (int32_t)(lcg() % (uint32_t)(c->failed_threshold - c->passed_threshold + 1)));
+}
+
 START_TEST(test_random_against_reference)
 {
   int cfg_i;
@@ -403,17 +419,7 @@ START_TEST(test_random_against_reference)
     int n;
     /* mostly small configurations (frequent qualifications), sometimes the
      * extremes of the int16 domain */
-    const bool big = (lcg() % 4U) == 0U;
-    c.failed_threshold = (int16_t)(big ? INT16_MAX - (int32_t)(lcg() % 100U) : 1 + (int32_t)(lcg() % 30U));
-    c.passed_threshold = (int16_t)(big ? INT16_MIN + (int32_t)(lcg() % 100U) : -1 - (int32_t)(lcg() % 30U));
-    c.prefailed_step = (uint16_t)(big ? 1U + lcg() % 32767U : 1U + lcg() % 12U);
-    c.prepassed_step = (uint16_t)(big ? 1U + lcg() % 32767U : 1U + lcg() % 12U);
-    c.jump_up = (lcg() & 1U) != 0U;
-    c.jump_down = (lcg() & 1U) != 0U;
-    c.jump_up_value = (int16_t)(c.passed_threshold +
-                                (int32_t)(lcg() % (uint32_t)(c.failed_threshold - c.passed_threshold + 1)));
-    c.jump_down_value = (int16_t)(c.passed_threshold +
-                                  (int32_t)(lcg() % (uint32_t)(c.failed_threshold - c.passed_threshold + 1)));
+    random_cfg(&c, (lcg() % 4U) == 0U);
     ck_assert_int_eq(canfdi_debounce_init(&d, &c), CANFDI_OK);
     for (n = 0; n < 500; n++) {
       const uint32_t u = lcg() % 16U;
@@ -460,16 +466,7 @@ START_TEST(test_report_inline_pass)
     canfdi_debounce_t a;
     canfdi_debounce_t b;
     int n;
-    c.failed_threshold = (int16_t)(1 + (int32_t)(lcg() % 30U));
-    c.passed_threshold = (int16_t)(-1 - (int32_t)(lcg() % 30U));
-    c.prefailed_step = (uint16_t)(1U + lcg() % 12U);
-    c.prepassed_step = (uint16_t)(1U + lcg() % 12U);
-    c.jump_up = (lcg() & 1U) != 0U;
-    c.jump_down = (lcg() & 1U) != 0U;
-    c.jump_up_value = (int16_t)(c.passed_threshold +
-                                (int32_t)(lcg() % (uint32_t)(c.failed_threshold - c.passed_threshold + 1)));
-    c.jump_down_value = (int16_t)(c.passed_threshold +
-                                  (int32_t)(lcg() % (uint32_t)(c.failed_threshold - c.passed_threshold + 1)));
+    random_cfg(&c, false);
     ck_assert_int_eq(canfdi_debounce_init(&a, &c), CANFDI_OK);
     ck_assert_int_eq(canfdi_debounce_init(&b, &c), CANFDI_OK);
     for (n = 0; n < 400; n++) {
