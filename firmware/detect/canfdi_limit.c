@@ -83,7 +83,7 @@ int32_t canfdi_limit_step(canfdi_limit_t *l, int32_t x)
       canfdi_count_inc(&l->diag.steps_violated);
     }
     out = canfdi_debounce_report(&l->deb, (s == CANFDI_LIMIT_IN_BAND) ? CANFDI_DEB_REPORT_PREPASSED
-                                                                    : CANFDI_DEB_REPORT_PREFAILED);
+                                                                      : CANFDI_DEB_REPORT_PREFAILED);
     CANFDI_ASSERT(out >= 0);
     /* A PREFAILED report that leaves the counter at the failed threshold is
      * the one that qualifies (or keeps) FAILED: remember its side. */

@@ -181,11 +181,9 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
     const uint32_t idx = (uint32_t)canfdi_ctz32(x);
     x &= x - 1U;
     if (idx < (uint32_t)dtc->n_dtcs) {
-      rc += ((report(r, dtc, (uint8_t)idx,
-                     (((fm >> idx) & 1U) != 0U) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, ff) &
-              REP_REJECTED) != 0U)
-                ? 1
-                : 0;
+      const uint32_t f = report(r, dtc, (uint8_t)idx,
+                                (((fm >> idx) & 1U) != 0U) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED, ff);
+      rc += ((f & REP_REJECTED) != 0U) ? 1 : 0;
       given++;
     }
   }

@@ -334,7 +334,7 @@ static void step_thr(canfdi_actmgr_t *m, const canfdi_actmgr_in_t *in,
   bool off;
 
   vst = canfdi_debounce_report(&m->vote_deb, vote->valid ? CANFDI_DEB_REPORT_PREPASSED
-                                                        : CANFDI_DEB_REPORT_PREFAILED);
+                                                          : CANFDI_DEB_REPORT_PREFAILED);
   CANFDI_ASSERT(vst >= 0);
 
   catalogue_target(f & CANFDI_ACTMGR_THR_FAULTS, &target, &reason);

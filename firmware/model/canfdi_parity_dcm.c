@@ -108,22 +108,17 @@ static canfdi_parity_dcm_coef_t pdcm_coef_q24(int32_t x_q24)
   return c;
 }
 
-/* pdcm_mac runs 35 times a step: inline where the product is one SMULL
- * (a call, its stacked arguments and saved registers cost about a third of
- * the work); on ARMv6-M, whose product is a call anyway, one copy. */
-#if defined(__ARM_ARCH_6M__)
-#define PDCM_MAC_INLINE
-#else
-#define PDCM_MAC_INLINE CANFDI_ALWAYS_INLINE
-#endif
-
 /*
  * acc +- c * x, x with fx fraction bits, in the Q23.40 accumulator.
  * Scaling and overflow: |m * x| < 2^62 exactly in int64_t; aligned to Q40
  * by a round-half-up right shift (f + fx > 40) or a saturating left shift;
  * the sum saturates (canfdi_add_s64_sat / canfdi_sub_s64_sat).
  */
-static PDCM_MAC_INLINE int64_t pdcm_mac(int64_t acc, canfdi_parity_dcm_coef_t c, int32_t x, unsigned fx, bool sub)
+/* 35 times a step: always inline except on ARMv6-M (CANFDI_V7M_INLINE,
+ * core/canfdi_fixp.h), where the product is a call anyway; on ARMv7-M a
+ * call, its stacked arguments and saved registers cost about a third of
+ * the work. */
+static CANFDI_V7M_INLINE int64_t pdcm_mac(int64_t acc, canfdi_parity_dcm_coef_t c, int32_t x, unsigned fx, bool sub)
 {
   const int64_t p = canfdi_smull32(c.m, x); /* SMULL; ARMv6-M: 16-bit halves */
   const int32_t s = (int32_t)c.f + (int32_t)fx - (int32_t)PDCM_ACC_FRAC;
