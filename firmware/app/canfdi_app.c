@@ -299,17 +299,16 @@ static void stage_gates(canfdi_app_t *app)
   }
 }
 
-/* The throttle estimator's updates on their slots of the rate schedule
- * (canfdi_app.h, CANFDI_APP_SLOT_EST_THR): step k = slot + decim - offset
- * of the estimator's schedule has k mod decim = 0 exactly on the slots
- * with slot mod decim = offset. Only when decim divides the schedule's
- * period (else the intervals between its updates would vary). */
-static void est_thr_align(canfdi_app_t *app)
+/* An estimator's updates on their slots of the rate schedule (canfdi_app.h,
+ * CANFDI_APP_SLOT_EST_DCM and _EST_THR): step k = slot + decim - offset of
+ * the estimator's schedule has k mod decim = 0 exactly on the slots with
+ * slot mod decim = offset. Only when decim divides the schedule's period
+ * (else the intervals between its updates would vary): returns whether
+ * the estimator is to be aligned, and k. */
+static bool est_slot(const canfdi_app_t *app, uint32_t decim, uint32_t offset, uint32_t *k)
 {
-  const uint32_t d = app->est_thr.cfg.decim;
-  if ((app->cal.diag_period_steps % d) == 0U) {
-    canfdi_est_thr_align(&app->est_thr, ((uint32_t)app->slot + d) - (CANFDI_APP_SLOT_EST_THR % d));
-  }
+  *k = ((uint32_t)app->slot + decim) - (offset % decim);
+  return (app->cal.diag_period_steps % decim) == 0U;
 }
 
 /* Stage 4b: residuals, estimates and the actuator monitors on this step's
@@ -330,6 +329,10 @@ static void stage_detect(canfdi_app_t *app)
     (void)canfdi_parity_dcm_step(&app->parity_dcm, &pd);
   }
   if (app->dcm.est_on) {
+    uint32_t k;
+    if (est_slot(app, app->est_dcm.cfg.decim, CANFDI_APP_SLOT_EST_DCM, &k)) {
+      canfdi_est_dcm_align(&app->est_dcm, k);
+    }
     canfdi_est_dcm_step(&app->est_dcm, pd.u_V_q16, pd.i_A_q16, pd.w_rad_s_q16);
   }
   pt.tps1_V_q16 = IN_VAL(app, CANFDI_RX_IN_THR_TPS1);
@@ -342,7 +345,10 @@ static void stage_detect(canfdi_app_t *app)
     (void)canfdi_parity_thr_step(&app->parity_thr, &pt);
   }
   if (app->thr.est_on) {
-    est_thr_align(app);
+    uint32_t k;
+    if (est_slot(app, app->est_thr.cfg.decim, CANFDI_APP_SLOT_EST_THR, &k)) {
+      canfdi_est_thr_align(&app->est_thr, k);
+    }
     canfdi_est_thr_step(&app->est_thr, pt.u_V_q16, pt.i_A_q16, app->vote_out.angle_rad_q16);
   }
   ai.thr_angle_rad_q16 = app->vote_out.angle_rad_q16;

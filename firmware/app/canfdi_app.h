@@ -197,15 +197,19 @@
  * every cal.diag_period_steps (see the header, rate schedule). */
 #define CANFDI_APP_FRAME_SLOTS 10U
 #define CANFDI_APP_SLOT_DIAG 0U
-/* The throttle estimator's RLS updates on fixed slots
- * (canfdi_est_thr_align): its electrical update on the slots with
- * slot mod decim = CANFDI_APP_SLOT_EST_THR (the even ones at its decim of
- * 2), its mechanical update and fast test (the costlier) on the odd ones,
- * never with the model rules' matching in slot CANFDI_APP_SLOT_DIAG. It
- * counts from its own start instead when its decim does not divide
- * cal.diag_period_steps (the intervals would vary). The DC motor's
- * estimator counts from its own start. */
+/* The estimators' RLS updates on fixed slots (canfdi_est_thr_align,
+ * canfdi_est_dcm_align). The throttle's electrical update on the slots
+ * with slot mod decim = CANFDI_APP_SLOT_EST_THR (the even ones at its
+ * decim of 2), its mechanical update and fast test (the costlier) on the
+ * odd ones, never with the model rules' matching in slot
+ * CANFDI_APP_SLOT_DIAG. The DC motor's armature update on the slots with
+ * slot mod decim = CANFDI_APP_SLOT_EST_DCM and its mechanical update one
+ * slot later (slots 2, 3, 7 and 8 at its decim of 5): never in the
+ * matching's slot nor in the one after it. An estimator counts from its
+ * own start instead when its decim does not divide cal.diag_period_steps
+ * (the intervals would vary). */
 #define CANFDI_APP_SLOT_EST_THR 0U
+#define CANFDI_APP_SLOT_EST_DCM 2U
 
 /* The NVM image: a 4-byte header (CANFDI_APP_IMAGE_TAG, version, the
  * security attempt counter, 0) before the DTC memory's image. */

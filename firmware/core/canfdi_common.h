@@ -44,6 +44,17 @@
 #define CANFDI_ALWAYS_INLINE inline
 #endif
 
+/* A decimated task that advances its phase (0 .. decim - 1) at the start
+ * of each step and runs its work at phase 0: the phase to set before step
+ * k of a caller's schedule so that the work falls on the steps with
+ * k mod decim = 0 (one less than k mod decim, modulo decim). decim >= 1.
+ * The estimators lock their RLS updates to the rate schedule with it. */
+static inline uint8_t canfdi_phase_before(uint32_t k, uint32_t decim)
+{
+  const uint32_t p = k % decim;
+  return (uint8_t)((p == 0U) ? (decim - 1U) : (p - 1U));
+}
+
 /* Compile-time assertion usable in C99, at file scope only (at block scope
  * the typedef trips -Wunused-local-typedefs). */
 #define CANFDI_STATIC_ASSERT(cond, msg) typedef char canfdi_static_assert_##msg[(cond) ? 1 : -1]

@@ -157,6 +157,12 @@ uint8_t canfdi_est_dcm_updated(const canfdi_est_dcm_t *e)
   return e->updated;
 }
 
+void canfdi_est_dcm_align(canfdi_est_dcm_t *e, uint32_t k)
+{
+  CANFDI_ASSERT(e != NULL);
+  e->phase = canfdi_phase_before(k, e->cfg.decim);
+}
+
 void canfdi_est_dcm_step(canfdi_est_dcm_t *e, int32_t ua_q16, int32_t ia_q16, int32_t w_q16)
 {
   CANFDI_ASSERT(e != NULL);

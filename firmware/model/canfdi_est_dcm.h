@@ -171,6 +171,14 @@ void canfdi_est_dcm_boost(canfdi_est_dcm_t *e);
 #define CANFDI_EST_DCM_UPD_MECH 0x02U
 uint8_t canfdi_est_dcm_updated(const canfdi_est_dcm_t *e);
 
+/* The next step is step k of the caller's schedule: the armature update
+ * falls on the steps with k mod decim = 0, the mechanical update on those
+ * with k mod decim = 1 (the same steps when decim is 1). Called before
+ * every step, it locks the updates to the schedule; never called, they
+ * count from the estimator's (re)start. Cannot fail. Cost: one 32-bit
+ * division. */
+void canfdi_est_dcm_align(canfdi_est_dcm_t *e, uint32_t k);
+
 /* The known load offset dM_L (Q16.16 N m, see the header) used from the
  * next step on until changed. Cannot fail. Cost: O(1).
  * Late load: a known load that arrives over a bus lags the true one by up

@@ -328,11 +328,8 @@ uint8_t canfdi_est_thr_updated(const canfdi_est_thr_t *e)
 
 void canfdi_est_thr_align(canfdi_est_thr_t *e, uint32_t k)
 {
-  uint32_t p;
   CANFDI_ASSERT(e != NULL);
-  /* the step advances the phase first: one less, modulo decim */
-  p = k % e->cfg.decim;
-  e->phase = (uint8_t)((p == 0U) ? (e->cfg.decim - 1U) : (p - 1U));
+  e->phase = canfdi_phase_before(k, e->cfg.decim);
 }
 
 void canfdi_est_thr_step(canfdi_est_thr_t *e, int32_t u_q16, int32_t i_q16, int32_t angle_q16)
