@@ -155,7 +155,7 @@
  * fault is named up to one period later than unscheduled; the hard rules'
  * faults at the same step.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
- * all of the application's RAM, static: 11 056 bytes on Cortex-M (740 of
+ * all of the application's RAM, static: 11 072 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
  * are `make footprint`'s (11 568 B and 1 968 B on the Cortex-M0). No heap.

@@ -6,6 +6,10 @@
 
 #include "core/canfdi_count.h"
 #include "core/canfdi_fixp.h"
+#include "core/canfdi_intrin.h"
+
+/* queue_changes collects the changed DTCs as bits of one word */
+CANFDI_STATIC_ASSERT(CANFDI_CFG_DTC_MAX_DTCS <= 32U, dtc_indices_fit_the_mask);
 
 #define TX_DUE(due, f) (((due) & (1U << (f))) != 0U)
 
@@ -18,6 +22,8 @@ void canfdi_app_out_init(canfdi_app_out_t *o, const canfdi_dtc_t *dtc)
     o->dtc_status_sent[i] = (st >= 0) ? (uint8_t)st : 0U;
   }
   o->dtc_changes_seen = dtc->changes;
+  o->n_stored = (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TFSLC);
+  o->n_failed = (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TF);
   o->rr_frames = 0U;
   o->step_time_max_us = 0U;
   o->cycle_time_max_us = 0U;
@@ -31,35 +37,42 @@ void canfdi_app_out_port_timing(canfdi_app_out_t *o, uint32_t step_us, uint32_t 
   o->cycle_time_max_us = (cycle_us > o->cycle_time_max_us) ? cycle_us : o->cycle_time_max_us;
 }
 
-static uint8_t stored_count(const canfdi_dtc_t *dtc)
-{
-  return (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TFSLC);
-}
-
-/* On change: one EcuDtc per DTC whose status differs from the last sent.
- * A status changes only with dtc->changes (canfdi_dtc.h): while that has
- * not moved there is nothing to look for. */
+/* On change: one EcuDtc per DTC whose status differs from the last sent,
+ * and the number of stored (TFSLC) and failed (TF) codes the frames carry,
+ * all from one pass over the statuses. A status changes only with
+ * dtc->changes (canfdi_dtc.h): while that has not moved there is nothing
+ * to look for and the counts stand. */
 static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc_t *dtc)
 {
-  const uint8_t count = (dtc->changes != o->dtc_changes_seen) ? stored_count(dtc) : 0U;
-  const uint32_t n = (dtc->changes != o->dtc_changes_seen) ? (uint32_t)dtc->n_dtcs : 0U;
-  uint32_t j;
-  o->dtc_changes_seen = dtc->changes;
-  for (j = 0U; j < n; j++) {
-    const uint8_t s = canfdi_dtc_status_at(dtc, (uint8_t)j); /* j < n_dtcs */
-    if (s != o->dtc_status_sent[j]) {
+  if (dtc->changes != o->dtc_changes_seen) {
+    uint32_t changed = 0U;
+    uint32_t stored = 0U;
+    uint32_t failed = 0U;
+    uint32_t j;
+    for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
+      const uint8_t s = canfdi_dtc_status_at(dtc, (uint8_t)j); /* j < n_dtcs */
+      stored += ((s & CANFDI_DTC_ST_TFSLC) != 0U) ? 1U : 0U;
+      failed += ((s & CANFDI_DTC_ST_TF) != 0U) ? 1U : 0U;
+      changed |= (s != o->dtc_status_sent[j]) ? (UINT32_C(1) << j) : 0U;
+    }
+    o->dtc_changes_seen = dtc->changes;
+    o->n_stored = (uint8_t)stored; /* <= n_dtcs */
+    o->n_failed = (uint8_t)failed;
+    while (changed != 0U) {
       canfdi_tx_dtc_t ev;
+      j = (uint32_t)canfdi_ctz32(changed);
+      changed &= changed - 1U;
       ev.dtc = dtc->table[j].dtc;
-      ev.status = s;
+      ev.status = canfdi_dtc_status_at(dtc, (uint8_t)j);
       ev.occurrence = canfdi_dtc_occurrence(dtc, (uint8_t)j);
       ev.index = (uint8_t)j;
-      ev.count = count;
+      ev.count = o->n_stored;
       if (canfdi_tx_dtc_event(tx, &ev) == CANFDI_OK) {
         canfdi_count_inc(&o->diag.dtc_events);
       } else {
         canfdi_count_inc(&o->diag.dtc_events_lost);
       }
-      o->dtc_status_sent[j] = s;
+      o->dtc_status_sent[j] = ev.status;
     }
   }
 }
@@ -67,7 +80,7 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
 /* Cyclic: stored code number rr_frames modulo the number stored. */
 static void cyclic_dtc(canfdi_app_out_t *o, const canfdi_dtc_t *dtc, canfdi_tx_dtc_t *rec)
 {
-  const uint8_t count = stored_count(dtc);
+  const uint8_t count = o->n_stored;
   const uint32_t want = (count > 0U) ? (o->rr_frames % count) : 0U;
   uint32_t n = 0U;
   uint32_t j;
@@ -134,7 +147,7 @@ static void fill_status(canfdi_app_out_t *o, const canfdi_app_out_src_t *src, ca
   d->status.deg_state_thr = src->mgr->thr_state;
   d->status.active_bridge = src->mgr->dcm.bridge;
   d->status.thr_limp_home = src->mgr->thr_limp_home;
-  d->status.active_dtc_count = canfdi_dtc_count_by_mask(src->dtc, (uint8_t)CANFDI_DTC_ST_TF);
+  d->status.active_dtc_count = o->n_failed;
   d->status.deadline_misses = src->deadline_misses;
   /* the port's timing since the last EcuStatus; a new maximum starts */
   d->status.step_time_max_us = o->step_time_max_us;

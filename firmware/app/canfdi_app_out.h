@@ -25,11 +25,13 @@
  * Scaling and overflow: values pass through as Q16.16 SI; canfdi_tx
  * saturates them to the DBC's ranges. Q8.24 estimates are converted with
  * canfdi_qconv_s32 (saturating). Counters saturate.
- * Cost per step: a status read per DTC (32) for the change detection, plus
- * the frame due: a DTC count (32 status reads) for EcuStatus, a pass over
- * the DTCs and one record read for the cyclic EcuDtc, two isolated-fault
- * reads for EcuDiagnosis; then canfdi_tx_step.
- * Memory: sizeof(canfdi_app_out_t) = 60 bytes on a 32-bit target with the
+ * Cost per step: when the DTC memory changed (its `changes` counter moved)
+ * one pass over the 32 statuses finds the changed codes and counts the
+ * stored and the failed ones, which EcuStatus and every EcuDtc carry (a
+ * step without a change reads no status for them); plus the frame due: a
+ * pass over the DTCs and one record read for the cyclic EcuDtc, two
+ * isolated-fault reads for EcuDiagnosis; then canfdi_tx_step.
+ * Memory: sizeof(canfdi_app_out_t) = 64 bytes on a 32-bit target with the
  * product's 32 DTCs. No heap.
  */
 #ifndef CANFDI_APP_OUT_H
@@ -71,6 +73,8 @@ typedef struct {
   uint8_t dtc_status_sent[CANFDI_CFG_DTC_MAX_DTCS]; /* last status queued per DTC */
   uint32_t dtc_changes_seen;   /* dtc->changes at the last look for changes:
                                 * a status changes only with it */
+  uint8_t n_stored;            /* codes with TFSLC, as of dtc_changes_seen */
+  uint8_t n_failed;            /* codes with TF, as of dtc_changes_seen */
   uint32_t rr_frames;          /* cyclic EcuDtc frames composed (wraps by intent) */
   uint32_t step_time_max_us;   /* port timing since the last EcuStatus */
   uint32_t cycle_time_max_us;

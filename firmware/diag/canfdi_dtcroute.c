@@ -66,9 +66,12 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       r->comm_tf = 0U;
       r->comm_changes = 0U;
       r->changes_last = 0U;
-      r->s3_quiet = false;
-      r->s3_act = 0U;
-      r->s3_n = 0U;
+      for (j = 0U; j < CANFDI_DTCROUTE_S3_SETS; j++) {
+        r->s3_quiet[j] = false;
+        r->s3_act[j] = 0U;
+        r->s3_n[j] = 0U;
+      }
+      r->s3_next = 0U;
       r->s3_changes = 0U;
       r->diag = (canfdi_dtcroute_diag_t){0};
       r->initialised = true;
@@ -194,18 +197,31 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
   return rc;
 }
 
-/* Source 3: the monitors' reports, one per DTC they feed. A step with the
- * same monitors passing, none failing, to a memory unchanged since a step
- * whose reports were all passes that changed nothing is that step again:
- * counted as given. Returns the reports refused. */
+/* Source 3: the monitors' reports, one per DTC they feed. A step with
+ * the same monitors passing, none failing, as a remembered pass whose
+ * reports were all passes that changed nothing (one of
+ * CANFDI_DTCROUTE_S3_SETS monitor sets: the monitors of the 10 ms frames
+ * run in one step of ten, the others in every step), to a memory
+ * unchanged since, is that pass again: counted as given. Returns the
+ * reports refused. */
 static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const canfdi_rx_report_t *com,
                                const canfdi_dtc_ff_t *ff)
 {
   int32_t rc = 0;
   const uint32_t act = com->prefailed | com->prepassed;
-  if (r->s3_quiet && (com->prefailed == 0U) && (act == r->s3_act) && dtc->cycle_active &&
-      (dtc->changes == r->s3_changes)) {
-    canfdi_count_add(&r->diag.reports, r->s3_n);
+  uint32_t hit = CANFDI_DTCROUTE_S3_SETS;
+  uint32_t k;
+  if ((dtc->changes != r->s3_changes) || !dtc->cycle_active) {
+    /* a status moved (or no cycle): no remembered pass holds */
+    for (k = 0U; k < CANFDI_DTCROUTE_S3_SETS; k++) {
+      r->s3_quiet[k] = false;
+    }
+  }
+  for (k = 0U; (k < CANFDI_DTCROUTE_S3_SETS) && (com->prefailed == 0U); k++) {
+    hit = (r->s3_quiet[k] && (act == r->s3_act[k])) ? k : hit;
+  }
+  if (hit < CANFDI_DTCROUTE_S3_SETS) {
+    canfdi_count_add(&r->diag.reports, r->s3_n[hit]);
   } else {
     /* combined per DTC: several monitors share U1A50/U1A51, whose
      * debouncer must see one report per step (a failure dominates); the
@@ -240,9 +256,20 @@ static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const ca
         n++;
       }
     }
-    r->s3_quiet = (noops == n);
-    r->s3_act = act;
-    r->s3_n = n;
+    if (noops == n) {
+      /* remembered in place of the older set */
+      k = r->s3_next;
+      r->s3_next = (uint8_t)((k + 1U) % CANFDI_DTCROUTE_S3_SETS);
+      r->s3_quiet[k] = true;
+      r->s3_act[k] = act;
+      r->s3_n[k] = n;
+    } else {
+      /* a report moved a debouncer (a PREFAILED may move one without
+       * moving `changes`): no remembered pass holds */
+      for (k = 0U; k < CANFDI_DTCROUTE_S3_SETS; k++) {
+        r->s3_quiet[k] = false;
+      }
+    }
   }
   r->s3_changes = dtc->changes;
   return rc;

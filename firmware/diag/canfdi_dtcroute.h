@@ -39,9 +39,14 @@
  * U-codes are source 3's alone (a PREPASSED moves a debounce counter
  * without moving `changes`). Source 3's PREPASSED reports step their
  * codes' debouncers towards the pass threshold; once a step's reports are
- * all passes that change nothing (canfdi_dtc_pass_is_noop), the next step
+ * all passes that change nothing (canfdi_dtc_pass_is_noop), a later step
  * with the same monitors passing, none failing, and the memory unchanged
- * is the same step again, and is counted as reported without them.
+ * is the same step again, and is counted as reported without them. Two
+ * such passes are remembered (CANFDI_DTCROUTE_S3_SETS), because the
+ * monitors of the 10 ms frames run in one step of ten and the set
+ * alternates; both are forgotten when `changes` moves or a pass moves a
+ * debouncer (a PREFAILED may move one without moving `changes`), so every
+ * code a remembered pass touched still sits where that pass left it.
  *
  * Faults for the manager (canfdi_dtcroute_manager_faults): a communication
  * fault while its trouble code has testFailed (qualified by the DTC memory's
@@ -68,9 +73,9 @@
  * index first).
  * manager_faults: a few mask operations, and a status read per
  * communication fault when the memory changed since the last call.
- * Memory: sizeof(canfdi_dtcroute_t) = 176 bytes on a 32-bit target (the
+ * Memory: sizeof(canfdi_dtcroute_t) = 188 bytes on a 32-bit target (the
  * index tables 64 + 20, the fault masks, source 1's last inputs and
- * masks, the last reported masks, source 3's last pass, the communication
+ * masks, the last reported masks, source 3's two remembered passes, the communication
  * faults' testFailed, state, config, diagnostics). No heap.
  */
 #ifndef CANFDI_DTCROUTE_H
@@ -80,6 +85,10 @@
 #include "comm/canfdi_rx.h"
 #include "core/canfdi_common.h"
 #include "diag/canfdi_dtc.h"
+
+/* Source 3's remembered quiet passes: two monitor sets (the monitors of
+ * the 10 ms frames run in one step of ten, the 1 ms ones in every step). */
+#define CANFDI_DTCROUTE_S3_SETS 2U
 
 typedef struct {
   uint16_t p2135_steps; /* 1..65535: unisolated disagreement until P2135 fails */
@@ -122,10 +131,11 @@ typedef struct {
   uint32_t changes_last; /* dtc->changes after they were last reported */
   uint32_t comm_tf;      /* the communication faults with testFailed */
   uint32_t comm_changes; /* dtc->changes when comm_tf was read */
-  uint32_t s3_act;       /* source 3: the monitors that ran in its last pass */
-  uint32_t s3_n;         /* the reports that pass gave */
+  uint32_t s3_act[CANFDI_DTCROUTE_S3_SETS]; /* source 3: the monitors of a remembered pass */
+  uint32_t s3_n[CANFDI_DTCROUTE_S3_SETS];   /* the reports that pass gave */
+  bool s3_quiet[CANFDI_DTCROUTE_S3_SETS];   /* it holds: passes only, none changed anything */
+  uint8_t s3_next;       /* the set the next quiet pass replaces */
   uint32_t s3_changes;   /* dtc->changes after the last step's source 3 */
-  bool s3_quiet;         /* that pass: passes only, none changed anything */
   bool src1_valid;
   bool agg_last_valid;
   bool comm_valid;
