@@ -94,6 +94,7 @@ static void guard_fixp(void)
   sink64(canfdi_wrap_u64_to_s64(in_u64));
   sink32((int32_t)canfdi_clz32(in_u32));
   sink32((int32_t)canfdi_ctz32(in_u32 | 1U));
+  sink32((int32_t)canfdi_phase_before(in_u32, in_n + 1U));
   sink32((int32_t)canfdi_clz64(in_u64));
   sink32(canfdi_mla_hi_rnd(a, b, c));
   sinku64(canfdi_umull32(in_u32, (uint32_t)b));
@@ -387,6 +388,7 @@ static void guard_est_dcm(void)
   sink32(canfdi_est_dcm_init(&est, &cfg));
   canfdi_est_dcm_reset(&est, in_n != 0U);
   canfdi_est_dcm_set_load_offset(&est, in_s32[2]);
+  canfdi_est_dcm_align(&est, in_u32);
   canfdi_est_dcm_step(&est, in_s32[0], in_s32[1], in_s32[2]);
   sink32(canfdi_est_dcm_ra_q16(&est));
   sink32(canfdi_est_dcm_la_q24(&est));
