@@ -55,7 +55,7 @@ $(ECU_ASAN_BIN): $(ECU_ASAN_OBJ) $(FW_HOST_OBJ)
 
 # One translation unit per source, linked directly; the main's features
 # serve the other port files too.
-$(ECU_REL_BIN): $(ECU_PORT_SRC) $(FW_SRC) $(wildcard firmware/port/linux/*.h)
+$(ECU_REL_BIN): $(ECU_PORT_SRC) $(FW_SRC) $(FW_HDR) $(wildcard firmware/port/linux/*.h)
 	@mkdir -p $(@D)
 	$(CC) $(REL_CFLAGS) $(SRC_CFLAGS_firmware/port/linux/canfdi_ecu_main.c) \
 	  -o $@ $(filter %.c,$^)

@@ -139,7 +139,7 @@ $(foreach m,$(PIL_COST_MACHINES),$(eval $(call PIL_COST_RULES,$(m))))
 # The harness as a plain program (no libFuzzer, no sanitizers; the
 # firmware with CANFDI_ASSERT on, like the host tests).
 $(PIL_EXPORT): $(FUZZ_DIR)/fuzz_export_main.c $(FUZZ_DIR)/fuzz_app_rx.c $(FUZZ_DIR)/fuzz_export.h $(FUZZ_RANGES_C) \
-    $(FUZZ_CODEC_DIR)/canfdi_rp_msg.c $(FW_SRC)
+    $(FUZZ_CODEC_DIR)/canfdi_rp_msg.c $(FW_SRC) $(FW_HDR)
 	@mkdir -p $(@D)
 	$(CC) $(WARN_C) -O2 -DFUZZ_EXPORT_LOG $(FW_INC) $(HOST_ASSERT) -I$(FUZZ_DIR) -I$(FUZZ_CODEC_DIR) \
 	  -o $@ $(filter %.c,$^) -lm

@@ -80,7 +80,10 @@ TEST_STEPS += sil-matrix
 # release firmware objects (-O2, no sanitizers: valgrind cannot run ASan
 # binaries), run under callgrind with collection only inside the step.
 SIL_REL_BIN := $(BUILD)/bench/canfdi-sil-rel
-$(SIL_REL_BIN): $(SIL_SRC) $(SIL_GEN_C) $(FW_SRC) $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,$(wildcard host_sim/*.c)) $(wildcard host_sim/gen/*.c)
+# One compiler call without dependency files: it depends on every header
+# too, so that a change to a header alone rebuilds it.
+$(SIL_REL_BIN): $(SIL_SRC) $(SIL_GEN_C) $(FW_SRC) $(filter-out host_sim/canfdi_sim_main.c host_sim/canfdi_sim_can.c,$(wildcard host_sim/*.c)) $(wildcard host_sim/gen/*.c) \
+    $(FW_HDR) $(wildcard host_sim/*.h host_sim/gen/*.h tests/sil/*.h)
 	@mkdir -p $(@D)
 	$(CC) $(REL_CFLAGS) $(SRC_CFLAGS_$(SIL_SRC)) -o $@ $(filter %.c,$^) -lm
 
