@@ -54,8 +54,10 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
           r->other_faults |= CANFDI_FAULT_BIT(f);
         }
       }
+      r->s3_dtcs = 0U;
       for (j = 0U; j < (uint32_t)CANFDI_RX_MON_COUNT; j++) {
         r->com_dtc[j] = index_of(dtc, canfdi_rx_monitor_dtc(j));
+        r->s3_dtcs |= (r->com_dtc[j] != CANFDI_DTC_NONE) ? (UINT32_C(1) << r->com_dtc[j]) : 0U;
       }
       r->p2135_dtc = index_of(dtc, CANFDI_DTC_P2135);
       r->p2135_n = 0U;
@@ -65,14 +67,13 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       r->comm_valid = false;
       r->comm_tf = 0U;
       r->comm_changes = 0U;
-      r->changes_last = 0U;
+      r->changes_out = dtc->changes;
       for (j = 0U; j < CANFDI_DTCROUTE_S3_SETS; j++) {
         r->s3_quiet[j] = false;
         r->s3_act[j] = 0U;
         r->s3_n[j] = 0U;
       }
       r->s3_next = 0U;
-      r->s3_changes = 0U;
       r->diag = (canfdi_dtcroute_diag_t){0};
       r->initialised = true;
       rc = CANFDI_OK;
@@ -165,6 +166,15 @@ static uint32_t report(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint8_t idx, can
   return out;
 }
 
+/* Source 3's remembered passes no longer hold. */
+static void s3_forget(canfdi_dtcroute_t *r)
+{
+  uint32_t k;
+  for (k = 0U; k < CANFDI_DTCROUTE_S3_SETS; k++) {
+    r->s3_quiet[k] = false;
+  }
+}
+
 /* Sources 1-2: the DTC masks fm / pm (n_agg DTCs). To a memory that has
  * not changed since the last report, only the DTCs whose verdict changed
  * are given; the others are counted as given (the header: a verdict given
@@ -175,8 +185,12 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
   int32_t rc = 0;
   uint32_t x = fm | pm;
   uint32_t given = 0U;
-  if (r->agg_last_valid && dtc->cycle_active && (dtc->changes == r->changes_last)) {
+  if (r->agg_last_valid && dtc->cycle_active) {
     x &= (fm ^ r->agg_last_fail) | (pm ^ r->agg_last_pass);
+  }
+  if ((x & r->s3_dtcs) != 0U) {
+    /* a code source 3 feeds gets a verdict (never in the product) */
+    s3_forget(r);
   }
   /* in DTC table order: the lowest index first (a DTC beyond the memory's
    * table has no index, so every DTC in the masks is one of its DTCs) */
@@ -211,11 +225,8 @@ static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const ca
   const uint32_t act = com->prefailed | com->prepassed;
   uint32_t hit = CANFDI_DTCROUTE_S3_SETS;
   uint32_t k;
-  if ((dtc->changes != r->s3_changes) || !dtc->cycle_active) {
-    /* a status moved (or no cycle): no remembered pass holds */
-    for (k = 0U; k < CANFDI_DTCROUTE_S3_SETS; k++) {
-      r->s3_quiet[k] = false;
-    }
+  if (!dtc->cycle_active) {
+    s3_forget(r); /* every report is refused */
   }
   for (k = 0U; (k < CANFDI_DTCROUTE_S3_SETS) && (com->prefailed == 0U); k++) {
     hit = (r->s3_quiet[k] && (act == r->s3_act[k])) ? k : hit;
@@ -242,6 +253,10 @@ static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const ca
         }
       }
     }
+    if ((touched & (r->agg_last_fail | r->agg_last_pass)) != 0U) {
+      /* a code with a verdict of sources 1-2 (never in the product) */
+      r->agg_last_valid = false;
+    }
     while (touched != 0U) {
       const uint32_t low = touched & ~(touched - 1U); /* the lowest set bit */
       const uint32_t idx = (uint32_t)canfdi_ctz32(low);
@@ -266,12 +281,9 @@ static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const ca
     } else {
       /* a report moved a debouncer (a PREFAILED may move one without
        * moving `changes`): no remembered pass holds */
-      for (k = 0U; k < CANFDI_DTCROUTE_S3_SETS; k++) {
-        r->s3_quiet[k] = false;
-      }
+      s3_forget(r);
     }
   }
-  r->s3_changes = dtc->changes;
   return rc;
 }
 
@@ -286,6 +298,13 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
     uint32_t pm;
     uint32_t n_agg;
     rc = 0;
+    if (dtc->changes != r->changes_out) {
+      /* the memory changed outside the routing since its last step (a
+       * clear, a cycle, aging, a restored image): no verdict or pass given
+       * before holds */
+      r->agg_last_valid = false;
+      s3_forget(r);
+    }
     combine_faults(r, failed, (in->passed & ~failed) & FAULT_IDS);
     fm = r->src1_fail;
     pm = r->src1_pass;
@@ -297,9 +316,9 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
       n_agg += (!had && (((fm | pm) & bit) != 0U)) ? 1U : 0U;
     }
     rc += report_verdicts(r, dtc, fm, pm, n_agg, in->ff);
-    r->changes_last = dtc->changes;
     /* Source 3: the input supervision's monitors (raw per-step results) */
     rc += report_monitors(r, dtc, in->com, in->ff);
+    r->changes_out = dtc->changes;
     canfdi_count_inc(&r->diag.steps);
   }
   return rc;

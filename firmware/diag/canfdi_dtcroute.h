@@ -30,23 +30,29 @@
  * cycle and with no clear in between, changes nothing: a second FAILED
  * finds the code failed, stored or not (a code displaced from the memory is
  * not stored again before its next failure), a second PASSED finds it
- * passed. So to a memory that has not changed since the last report (its
- * `changes` counter, which every status, clear and cycle moves) a step
- * gives only the DTCs whose verdict changed, and counts the others as
- * reported (most steps give none). This holds because no other source
- * reports their codes in between: the diagnosis gives no verdict for the
- * communication faults and the manager detects none of them, so the
- * U-codes are source 3's alone (a PREPASSED moves a debounce counter
- * without moving `changes`). Source 3's PREPASSED reports step their
- * codes' debouncers towards the pass threshold; once a step's reports are
- * all passes that change nothing (canfdi_dtc_pass_is_noop), a later step
- * with the same monitors passing, none failing, and the memory unchanged
- * is the same step again, and is counted as reported without them. Two
+ * passed. So a step gives only the DTCs whose verdict changed, and counts
+ * the others as reported (most steps give none), as long as nothing else
+ * touched those codes since: nothing outside the routing changed the memory
+ * (its `changes` counter, which every status, clear, cycle and restored
+ * image moves, is where the routing's last step left it) and source 3 did
+ * not report to one of them (never in the product: the diagnosis gives no
+ * verdict for the communication faults and the manager detects none of
+ * them, so the U-codes are source 3's alone). The routing's own reports
+ * to other codes do not count: a report changes its own code only, and a
+ * displacement only the victim's CDTC and WIR, which no pass test reads.
+ * Source 3's PREPASSED reports step their codes' debouncers towards the
+ * pass threshold; once a step's reports are all passes that change nothing
+ * (canfdi_dtc_pass_is_noop), a later step with the same monitors passing
+ * and none failing is the same step again, and is counted as reported
+ * without them, under the same condition (nothing outside the routing
+ * changed the memory, sources 1-2 gave none of its codes a verdict). Two
  * such passes are remembered (CANFDI_DTCROUTE_S3_SETS), because the
  * monitors of the 10 ms frames run in one step of ten and the set
- * alternates; both are forgotten when `changes` moves or a pass moves a
- * debouncer (a PREFAILED may move one without moving `changes`), so every
- * code a remembered pass touched still sits where that pass left it.
+ * alternates; both are also forgotten when a pass moves a debouncer (a
+ * PREFAILED may move one without moving `changes`), so every code a
+ * remembered pass touched still sits where that pass left it.
+ * tests/unit/test_dtcroute.c checks all of this against a reference that
+ * reports every verdict and monitor every step.
  *
  * Faults for the manager (canfdi_dtcroute_manager_faults): a communication
  * fault while its trouble code has testFailed (qualified by the DTC memory's
@@ -75,8 +81,9 @@
  * communication fault when the memory changed since the last call.
  * Memory: sizeof(canfdi_dtcroute_t) = 188 bytes on a 32-bit target (the
  * index tables 64 + 20, the fault masks, source 1's last inputs and
- * masks, the last reported masks, source 3's two remembered passes, the communication
- * faults' testFailed, state, config, diagnostics). No heap.
+ * masks, the last reported masks, source 3's two remembered passes and
+ * its DTC mask, the communication faults' testFailed, state, config,
+ * diagnostics). No heap.
  */
 #ifndef CANFDI_DTCROUTE_H
 #define CANFDI_DTCROUTE_H
@@ -128,14 +135,14 @@ typedef struct {
   uint32_t src1_n;       /* DTCs with a verdict among them */
   uint32_t agg_last_fail; /* sources 1-2 as last reported: failed DTCs */
   uint32_t agg_last_pass; /* and passed DTCs */
-  uint32_t changes_last; /* dtc->changes after they were last reported */
+  uint32_t changes_out;  /* dtc->changes at the end of the last step */
   uint32_t comm_tf;      /* the communication faults with testFailed */
   uint32_t comm_changes; /* dtc->changes when comm_tf was read */
   uint32_t s3_act[CANFDI_DTCROUTE_S3_SETS]; /* source 3: the monitors of a remembered pass */
   uint32_t s3_n[CANFDI_DTCROUTE_S3_SETS];   /* the reports that pass gave */
   bool s3_quiet[CANFDI_DTCROUTE_S3_SETS];   /* it holds: passes only, none changed anything */
   uint8_t s3_next;       /* the set the next quiet pass replaces */
-  uint32_t s3_changes;   /* dtc->changes after the last step's source 3 */
+  uint32_t s3_dtcs;      /* the DTCs source 3 feeds (bit = table index) */
   bool src1_valid;
   bool agg_last_valid;
   bool comm_valid;

@@ -359,7 +359,10 @@ START_TEST(test_against_reference)
     if (rnd(20U) == 0U) {
       const uint32_t k = 1U + rnd(4U);
       for (j = 0U; j < k; j++) {
-        report[rnd_fault()] = (int8_t)((int32_t)rnd(3U) - 1);
+        /* now and then a verdict for a communication fault, which the
+         * product's diagnosis never gives: its U-code is then fed by
+         * sources 1 and 3, and neither may skip a report of it */
+        report[(rnd(16U) == 0U) ? (1U + rnd(CANFDI_FAULT_COUNT - 1U)) : rnd_fault()] = (int8_t)((int32_t)rnd(3U) - 1);
       }
       report[0] = (int8_t)((int32_t)rnd(3U) - 1); /* id 0 is never routed */
     }
