@@ -204,12 +204,15 @@
  * odd ones, never with the model rules' matching in slot
  * CANFDI_APP_SLOT_DIAG. The DC motor's armature update on the slots with
  * slot mod decim = CANFDI_APP_SLOT_EST_DCM and its mechanical update one
- * slot later (slots 2, 3, 7 and 8 at its decim of 5): never in the
- * matching's slot nor in the one after it. An estimator counts from its
+ * slot later (slots 1, 2, 6 and 7 at its decim of 5): never in the
+ * matching's slot, where the trouble codes of a new verdict are stored and
+ * sent. (Of the phases that avoid slot 0, this one keeps the envelope
+ * bench's verdicts: slots 2, 3, 7, 8 named P1A21 for one more incipient
+ * R_A ramp in 4 112 runs, docs/requirements.md.) An estimator counts from its
  * own start instead when its decim does not divide cal.diag_period_steps
  * (the intervals would vary). */
 #define CANFDI_APP_SLOT_EST_THR 0U
-#define CANFDI_APP_SLOT_EST_DCM 2U
+#define CANFDI_APP_SLOT_EST_DCM 1U
 
 /* The NVM image: a 4-byte header (CANFDI_APP_IMAGE_TAG, version, the
  * security attempt counter, 0) before the DTC memory's image. */
