@@ -41,6 +41,7 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       uint32_t j;
       r->cfg = *cfg;
       r->comm_faults = 0U;
+      r->comm_dtcs = 0U;
       r->other_faults = 0U;
       for (f = 0U; f < CANFDI_FAULT_COUNT; f++) {
         for (j = 0U; j < CANFDI_CATALOGUE_MAX_DTCS; j++) {
@@ -50,6 +51,7 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
           /* no fault */
         } else if (canfdi_catalogue_fault[f].kind == CANFDI_KIND_COMMUNICATION) {
           r->comm_faults |= CANFDI_FAULT_BIT(f);
+          r->comm_dtcs |= (r->fault_dtc[f][0] != CANFDI_DTC_NONE) ? (UINT32_C(1) << r->fault_dtc[f][0]) : 0U;
         } else {
           r->other_faults |= CANFDI_FAULT_BIT(f);
         }
@@ -66,7 +68,6 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
       r->src1_valid = false;
       r->comm_valid = false;
       r->comm_tf = 0U;
-      r->comm_changes = 0U;
       r->changes_out = dtc->changes;
       for (j = 0U; j < CANFDI_DTCROUTE_S3_SETS; j++) {
         r->s3_quiet[j] = false;
@@ -192,6 +193,9 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
     /* a code source 3 feeds gets a verdict (never in the product) */
     s3_forget(r);
   }
+  if ((x & r->comm_dtcs) != 0U) {
+    r->comm_valid = false; /* likewise */
+  }
   /* in DTC table order: the lowest index first (a DTC beyond the memory's
    * table has no index, so every DTC in the masks is one of its DTCs) */
   while (x != 0U) {
@@ -280,8 +284,10 @@ static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const ca
       r->s3_n[k] = n;
     } else {
       /* a report moved a debouncer (a PREFAILED may move one without
-       * moving `changes`): no remembered pass holds */
+       * moving `changes`): no remembered pass holds, and a communication
+       * fault's testFailed may have moved */
       s3_forget(r);
+      r->comm_valid = false;
     }
   }
   return rc;
@@ -304,6 +310,7 @@ int32_t canfdi_dtcroute_step(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc,
        * before holds */
       r->agg_last_valid = false;
       s3_forget(r);
+      r->comm_valid = false;
     }
     combine_faults(r, failed, (in->passed & ~failed) & FAULT_IDS);
     fm = r->src1_fail;
@@ -330,8 +337,11 @@ uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t
   uint32_t bits = 0U;
   if ((r != NULL) && r->initialised && (dtc != NULL)) {
     /* the communication faults: their codes' testFailed, read again only
-     * when the memory changed (its `changes` moves with every status) */
-    if (!r->comm_valid || (dtc->changes != r->comm_changes)) {
+     * when one of those codes may have changed: a report to one of them
+     * that was not a pass changing nothing, or a change of the memory
+     * outside the routing (its `changes` is not where the routing's last
+     * step left it) */
+    if (!r->comm_valid || (dtc->changes != r->changes_out)) {
       uint32_t x = r->comm_faults;
       uint32_t c = 0U;
       while (x != 0U) {
@@ -344,7 +354,6 @@ uint32_t canfdi_dtcroute_manager_faults(canfdi_dtcroute_t *r, const canfdi_dtc_t
         c |= ((st & CANFDI_DTC_ST_TF) != 0U) ? CANFDI_FAULT_BIT(f) : 0U;
       }
       r->comm_tf = c;
-      r->comm_changes = dtc->changes;
       r->comm_valid = true;
     }
     /* the others: FAILED sets, PASSED clears (disjoint), NONE keeps */

@@ -78,7 +78,9 @@
  * report per DTC they feed (collected as a bit mask, reported lowest
  * index first).
  * manager_faults: a few mask operations, and a status read per
- * communication fault when the memory changed since the last call.
+ * communication fault when one of their codes may have changed since the
+ * last read (a report to one of them that was not a pass changing nothing,
+ * or a change of the memory outside the routing).
  * Memory: sizeof(canfdi_dtcroute_t) = 188 bytes on a 32-bit target (the
  * index tables 64 + 20, the fault masks, source 1's last inputs and
  * masks, the last reported masks, source 3's two remembered passes and
@@ -137,7 +139,7 @@ typedef struct {
   uint32_t agg_last_pass; /* and passed DTCs */
   uint32_t changes_out;  /* dtc->changes at the end of the last step */
   uint32_t comm_tf;      /* the communication faults with testFailed */
-  uint32_t comm_changes; /* dtc->changes when comm_tf was read */
+  uint32_t comm_dtcs;    /* the communication faults' DTCs (bit = table index) */
   uint32_t s3_act[CANFDI_DTCROUTE_S3_SETS]; /* source 3: the monitors of a remembered pass */
   uint32_t s3_n[CANFDI_DTCROUTE_S3_SETS];   /* the reports that pass gave */
   bool s3_quiet[CANFDI_DTCROUTE_S3_SETS];   /* it holds: passes only, none changed anything */
