@@ -141,10 +141,10 @@
  * Rate schedule (docs/architecture.md, "Rate schedule"): a 10 ms frame of
  * CANFDI_APP_FRAME_SLOTS 1 ms slots (app->slot). Every step: input
  * supervision, vote, control, gates, parity residuals and the estimators'
- * SVFs (their RLS updates decimated: est_dcm armature and mechanical on
- * two consecutive steps of every 5, counted from its start; est_thr
- * electrical on the even slots, mechanical and fast test on the odd
- * ones, CANFDI_APP_SLOT_EST_THR), actuator monitors, symptom vector (its
+ * SVFs (their RLS updates decimated: est_dcm armature on slots 1 and 6,
+ * mechanical on 2 and 7, CANFDI_APP_SLOT_EST_DCM; est_thr electrical on
+ * the even slots, mechanical and fast test on the odd ones,
+ * CANFDI_APP_SLOT_EST_THR), actuator monitors, symptom vector (its
  * filters are 1 ms filters), the diagnosis' flags, symptom persistence
  * and hard rules (canfdi_diagnosis_step_hard), DTC routing (it takes
  * one-step events: a rejected frame, a timeout, the manager's findings),
