@@ -9,7 +9,7 @@
 #include "core/canfdi_intrin.h"
 
 /* queue_changes collects the changed DTCs as bits of one word */
-CANFDI_STATIC_ASSERT(CANFDI_CFG_DTC_MAX_DTCS <= 32U, dtc_indices_fit_the_mask);
+CANFDI_STATIC_ASSERT(CANFDI_CFG_DTC_MAX_DTCS <= 32U, changed_dtcs_fit_one_word);
 
 #define TX_DUE(due, f) (((due) & (1U << (f))) != 0U)
 

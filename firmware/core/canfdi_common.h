@@ -51,8 +51,11 @@
  * The estimators lock their RLS updates to the rate schedule with it. */
 static inline uint8_t canfdi_phase_before(uint32_t k, uint32_t decim)
 {
-  const uint32_t p = k % decim;
-  return (uint8_t)((p == 0U) ? (decim - 1U) : (p - 1U));
+  uint32_t p = k % decim;
+  if (p == 0U) {
+    p = decim;
+  }
+  return (uint8_t)(p - 1U);
 }
 
 /* Compile-time assertion usable in C99, at file scope only (at block scope
