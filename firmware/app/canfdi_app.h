@@ -113,27 +113,31 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      15 395   17 165   24 468
- *   Cortex-M4 (an386)      15 395   17 169   24 478
- *   Cortex-M0 (microbit)   30 157   34 354   47 611
- * and at most 24 481 (M4) / 49 990 (M0) over the PIL scenarios (the step
- * in which dcm_ia_offset's fault is isolated: the model rules' matching
- * with symptoms present, the trouble codes stored and sent, an RLS
- * update). Where the instructions go, per module, per slot of the rate
+ *   Cortex-M3 (an385)      15 323   16 880   21 775
+ *   Cortex-M4 (an386)      15 325   16 884   21 778
+ *   Cortex-M0 (microbit)   30 203   34 106   43 454
+ * and at most 22 686 (M4) / 49 333 (M0) over the PIL scenarios. On the
+ * M4 that is the step after a tester's ClearDiagnosticInformation (every
+ * trouble code's verdict given again to the cleared memory, every status
+ * sent); without one, at most 21 778 (the demo's step 2100, where the
+ * first verdicts reach the trouble codes: the model rules' matching, the
+ * codes' first PASSED, the EcuDtc frames). On the M0 it is a step with two RLS updates while
+ * dcm_ia_offset's fault is present (its RLS arithmetic is three times the
+ * M4's). Where the instructions go, per module, per slot of the rate
  * schedule and in the costliest steps: `make bench-pil-profile`
  * (tests/pil/pil_profile.py; its split is summarised in
  * docs/requirements.md, requirement 1). A 1 ms step needs a Cortex-M4 of
- * roughly 40 MHz or more with margin (the worst step at ~1.2 cycles per
- * instruction: 32 MHz for the whole millisecond); on a Cortex-M0 at
+ * roughly 35 MHz or more with margin (the worst step at ~1.2 cycles per
+ * instruction: 28 MHz for the whole millisecond); on a Cortex-M0 at
  * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
- * halves, core/canfdi_fixp.h, and runs ~2.0 times the M4's count).
+ * halves, core/canfdi_fixp.h, and runs ~2.1 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 21 600 (M4) / 43 200
- * (M0) in those steps, within the same run's maxima (24 200 / 47 000).
+ * of tests/sil/scenarios/uds_workshop.scn): at most 19 900 (M4) / 39 600
+ * (M0) in those steps; the clear's effect comes one step later (above).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 24 481 / 49 990,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 22 686 / 49 333,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
@@ -158,7 +162,7 @@
  * all of the application's RAM, static: 11 072 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 568 B and 1 968 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 584 B and 1 968 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H
