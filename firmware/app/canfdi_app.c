@@ -299,16 +299,15 @@ static void stage_gates(canfdi_app_t *app)
   }
 }
 
-/* An estimator's updates on their slots of the rate schedule (canfdi_app.h,
- * CANFDI_APP_SLOT_EST_DCM and _EST_THR): step k = slot + decim - offset of
- * the estimator's schedule has k mod decim = 0 exactly on the slots with
- * slot mod decim = offset. Only when decim divides the schedule's period
- * (else the intervals between its updates would vary): returns whether
- * the estimator is to be aligned, and k. */
-static bool est_slot(const canfdi_app_t *app, uint32_t decim, uint32_t offset, uint32_t *k)
+/* An estimator's step of its schedule advanced with the slot, without a
+ * division (canfdi_app_power.c sets it at power-up, canfdi_app.h). */
+static uint8_t est_next(uint8_t k, uint32_t decim)
 {
-  *k = ((uint32_t)app->slot + decim) - (offset % decim);
-  return (app->cal.diag_period_steps % decim) == 0U;
+  uint8_t n = k;
+  if (k != CANFDI_APP_EST_UNLOCKED) {
+    n = (((uint32_t)k + 1U) >= decim) ? 0U : (uint8_t)(k + 1U);
+  }
+  return n;
 }
 
 /* Stage 4b: residuals, estimates and the actuator monitors on this step's
@@ -329,9 +328,8 @@ static void stage_detect(canfdi_app_t *app)
     (void)canfdi_parity_dcm_step(&app->parity_dcm, &pd);
   }
   if (app->dcm.est_on) {
-    uint32_t k;
-    if (est_slot(app, app->est_dcm.cfg.decim, CANFDI_APP_SLOT_EST_DCM, &k)) {
-      canfdi_est_dcm_align(&app->est_dcm, k);
+    if (app->est_k[0] != CANFDI_APP_EST_UNLOCKED) {
+      canfdi_est_dcm_align(&app->est_dcm, app->est_k[0]);
     }
     canfdi_est_dcm_step(&app->est_dcm, pd.u_V_q16, pd.i_A_q16, pd.w_rad_s_q16);
   }
@@ -345,9 +343,8 @@ static void stage_detect(canfdi_app_t *app)
     (void)canfdi_parity_thr_step(&app->parity_thr, &pt);
   }
   if (app->thr.est_on) {
-    uint32_t k;
-    if (est_slot(app, app->est_thr.cfg.decim, CANFDI_APP_SLOT_EST_THR, &k)) {
-      canfdi_est_thr_align(&app->est_thr, k);
+    if (app->est_k[1] != CANFDI_APP_EST_UNLOCKED) {
+      canfdi_est_thr_align(&app->est_thr, app->est_k[1]);
     }
     canfdi_est_thr_step(&app->est_thr, pt.u_V_q16, pt.i_A_q16, app->vote_out.angle_rad_q16);
   }
@@ -577,6 +574,8 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     if (app->slot >= app->cal.diag_period_steps) {
       app->slot = 0U;
     }
+    app->est_k[0] = est_next(app->est_k[0], app->est_dcm.cfg.decim);
+    app->est_k[1] = est_next(app->est_k[1], app->est_thr.cfg.decim);
     app->applied_set = false; /* set_applied acts on one step */
     app->running = true;
   }

@@ -217,6 +217,7 @@
  * (the intervals would vary). */
 #define CANFDI_APP_SLOT_EST_THR 0U
 #define CANFDI_APP_SLOT_EST_DCM 1U
+#define CANFDI_APP_EST_UNLOCKED 0xFFU
 
 /* The NVM image: a 4-byte header (CANFDI_APP_IMAGE_TAG, version, the
  * security attempt counter, 0) before the DTC memory's image. */
@@ -344,6 +345,10 @@ typedef struct {
   canfdi_app_diag_t diag;
   uint8_t slot;         /* this step's slot: steps since power-up modulo
                          * cal.diag_period_steps */
+  uint8_t est_k[2];     /* the DC motor's (0) and the throttle's (1)
+                         * estimator: this step's step of its schedule,
+                         * modulo its decim (CANFDI_APP_EST_UNLOCKED: it
+                         * counts from its own start) */
   bool running;         /* a step has run since power-up */
   bool reset_requested; /* ECUReset answered: the port powers down and up */
   bool initialised;

@@ -22,6 +22,19 @@ static uint16_t per_period(uint16_t steps, uint8_t period)
   return (uint16_t)((n < 1U) ? 1U : n);
 }
 
+/* An estimator's step of its schedule in slot 0 (canfdi_app.h, the
+ * estimators' slots): k mod decim = 0 exactly on the slots with
+ * slot mod decim = offset; unlocked when decim does not divide the period
+ * (the intervals between its updates would vary). decim 1..100. */
+static uint8_t est_k0(uint32_t period, uint32_t decim, uint32_t offset)
+{
+  uint8_t k = (uint8_t)CANFDI_APP_EST_UNLOCKED;
+  if ((period % decim) == 0U) {
+    k = (uint8_t)((decim - (offset % decim)) % decim);
+  }
+  return k;
+}
+
 static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
 {
   canfdi_app_cal_t *c = &app->cal;
@@ -56,6 +69,10 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
       (canfdi_uds_init(&app->uds, &c->uds, 0U, now_us) != CANFDI_OK) ||
       (canfdi_dtc_cycle_start(&app->dtc) != CANFDI_OK))) {
     rc = -CANFDI_EINVAL;
+  }
+  if (rc == CANFDI_OK) {
+    app->est_k[0] = est_k0(period, app->est_dcm.cfg.decim, CANFDI_APP_SLOT_EST_DCM);
+    app->est_k[1] = est_k0(period, app->est_thr.cfg.decim, CANFDI_APP_SLOT_EST_THR);
   }
   return rc;
 }

@@ -51,7 +51,7 @@
  * The estimators lock their RLS updates to the rate schedule with it. */
 static inline uint8_t canfdi_phase_before(uint32_t k, uint32_t decim)
 {
-  uint32_t p = k % decim;
+  uint32_t p = (k < decim) ? k : (k % decim); /* no division for k < decim */
   if (p == 0U) {
     p = decim;
   }

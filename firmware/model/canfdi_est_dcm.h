@@ -175,8 +175,8 @@ uint8_t canfdi_est_dcm_updated(const canfdi_est_dcm_t *e);
  * falls on the steps with k mod decim = 0, the mechanical update on those
  * with k mod decim = 1 (the same steps when decim is 1). Called before
  * every step, it locks the updates to the schedule; never called, they
- * count from the estimator's (re)start. Cannot fail. Cost: one 32-bit
- * division. */
+ * count from the estimator's (re)start. Cannot fail. Cost: O(1);
+ * a 32-bit division only for k >= decim. */
 void canfdi_est_dcm_align(canfdi_est_dcm_t *e, uint32_t k);
 
 /* The known load offset dM_L (Q16.16 N m, see the header) used from the

@@ -276,8 +276,8 @@ uint8_t canfdi_est_thr_updated(const canfdi_est_thr_t *e);
  * falls on the steps with k mod decim = 0, the mechanical update and the
  * fast test on those with k mod decim = 1 (the same steps when decim is 1).
  * Called before every step, it locks the updates to the schedule; never
- * called, they count from the estimator's (re)start. Cannot fail. Cost: one
- * 32-bit division. */
+ * called, they count from the estimator's (re)start. Cannot fail. Cost: O(1);
+ * a 32-bit division only for k >= decim. */
 void canfdi_est_thr_align(canfdi_est_thr_t *e, uint32_t k);
 
 /* One 1 ms step: motor voltage (V), current (A), angle (rad), Q16.16. */
