@@ -113,13 +113,13 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      15 323   16 880   21 775
- *   Cortex-M4 (an386)      15 325   16 884   21 778
- *   Cortex-M0 (microbit)   30 203   34 106   43 454
- * and at most 22 686 (M4) / 49 333 (M0) over the PIL scenarios. On the
+ *   Cortex-M3 (an385)      15 338   16 891   21 785
+ *   Cortex-M4 (an386)      15 339   16 895   21 788
+ *   Cortex-M0 (microbit)   30 151   34 005   43 328
+ * and at most 22 696 (M4) / 49 243 (M0) over the PIL scenarios. On the
  * M4 that is the step after a tester's ClearDiagnosticInformation (every
  * trouble code's verdict given again to the cleared memory, every status
- * sent); without one, at most 21 778 (the demo's step 2100, where the
+ * sent); without one, at most 21 788 (the demo's step 2100, where the
  * first verdicts reach the trouble codes: the model rules' matching, the
  * codes' first PASSED, the EcuDtc frames). On the M0 it is a step with two RLS updates while
  * dcm_ia_offset's fault is present (its RLS arithmetic is three times the
@@ -134,10 +134,10 @@
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 19 900 (M4) / 39 600
+ * of tests/sil/scenarios/uds_workshop.scn): at most 19 900 (M4) / 39 500
  * (M0) in those steps; the clear's effect comes one step later (above).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 22 686 / 49 333,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 22 696 / 49 243,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
@@ -162,7 +162,7 @@
  * all of the application's RAM, static: 11 072 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 584 B and 1 968 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 584 B and 1 976 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H
