@@ -21,6 +21,7 @@ void canfdi_dtcroute_default_cfg(canfdi_dtcroute_cfg_t *cfg)
 {
   if (cfg != NULL) {
     cfg->p2135_steps = 500U;
+    cfg->verdicts_per_step = CANFDI_DTCROUTE_VERDICTS_PER_STEP;
   }
 }
 
@@ -36,7 +37,8 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
   int32_t rc = -CANFDI_EINVAL;
   if (r != NULL) {
     r->initialised = false;
-    if ((cfg != NULL) && (dtc != NULL) && (dtc->table != NULL) && (cfg->p2135_steps >= 1U)) {
+    if ((cfg != NULL) && (dtc != NULL) && (dtc->table != NULL) && (cfg->p2135_steps >= 1U) &&
+        (cfg->verdicts_per_step >= 1U) && (cfg->verdicts_per_step <= 32U)) {
       uint32_t f;
       uint32_t j;
       r->cfg = *cfg;
@@ -176,18 +178,49 @@ static void s3_forget(canfdi_dtcroute_t *r)
   }
 }
 
+/* The lowest k set bits of x (all of x when it has k or fewer). */
+static uint32_t lowest_bits(uint32_t x, uint32_t k)
+{
+  uint32_t out = 0U;
+  uint32_t rest = x;
+  uint32_t n;
+  for (n = 0U; (n < k) && (rest != 0U); n++) {
+    out |= rest & (0U - rest);
+    rest &= rest - 1U;
+  }
+  return out;
+}
+
 /* Sources 1-2: the DTC masks fm / pm (n_agg DTCs). To a memory that has
  * not changed since the last report, only the DTCs whose verdict changed
  * are given; the others are counted as given (the header: a verdict given
- * again to its DTC changes nothing). Returns the reports refused. */
+ * again to its DTC changes nothing). At most cfg.verdicts_per_step are
+ * given, failures first: the rest stay due, and are given in the next
+ * steps (their last-reported bits are left clear, so they still differ).
+ * Returns the reports refused. */
 static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t fm, uint32_t pm, uint32_t n_agg,
                                const canfdi_dtc_ff_t *ff)
 {
   int32_t rc = 0;
-  uint32_t x = fm | pm;
+  uint32_t due = fm | pm;
+  uint32_t x;
+  uint32_t left;
   uint32_t given = 0U;
+  uint32_t n_left = 0U;
   if (r->agg_last_valid && dtc->cycle_active) {
-    x &= (fm ^ r->agg_last_fail) | (pm ^ r->agg_last_pass);
+    due &= (fm ^ r->agg_last_fail) | (pm ^ r->agg_last_pass);
+  }
+  x = due;
+  left = 0U;
+  if (due != 0U) {
+    /* most steps have none due */
+    x = lowest_bits(due & fm, r->cfg.verdicts_per_step);
+    for (left = x; left != 0U; left &= left - 1U) {
+      given++;
+    }
+    x |= lowest_bits(due & ~fm, (uint32_t)r->cfg.verdicts_per_step - given);
+    left = due & ~x;
+    given = 0U;
   }
   if ((x & r->s3_dtcs) != 0U) {
     /* a code source 3 feeds gets a verdict (never in the product) */
@@ -208,9 +241,12 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
       given++;
     }
   }
-  canfdi_count_add(&r->diag.reports, n_agg - given);
-  r->agg_last_fail = fm;
-  r->agg_last_pass = pm;
+  for (x = left; x != 0U; x &= x - 1U) {
+    n_left++;
+  }
+  canfdi_count_add(&r->diag.reports, (n_agg - given) - n_left);
+  r->agg_last_fail = fm & ~left;
+  r->agg_last_pass = pm & ~left;
   r->agg_last_valid = (rc == 0);
   return rc;
 }

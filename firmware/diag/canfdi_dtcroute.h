@@ -40,6 +40,17 @@
  * them, so the U-codes are source 3's alone). The routing's own reports
  * to other codes do not count: a report changes its own code only, and a
  * displacement only the victim's CDTC and WIR, which no pass test reads.
+ * Budget: a step gives at most cfg.verdicts_per_step of these DTCs
+ * (CANFDI_DTCROUTE_VERDICTS_PER_STEP = 4 in the product), the failures
+ * first, then the passes, each in table order; the others stay due and
+ * are given in the next steps, with the verdict they have then. Why: after
+ * a tester's clear, a new operation cycle, or at the first verdicts after
+ * power-up, every DTC with a verdict is due at once (about twenty), and
+ * giving them in one step, each with its status change and its on-change
+ * EcuDtc frame, was the costliest 1 ms step of the application (Cortex-M4
+ * 22 696 instructions, after a clear). Given four per step, the last of
+ * twenty reaches the memory 4 ms later. A failure waits only when more
+ * than four DTCs fail in the same step.
  * Source 3's PREPASSED reports step their codes' debouncers towards the
  * pass threshold; once a step's reports are all passes that change nothing
  * (canfdi_dtc_pass_is_noop), a later step with the same monitors passing
@@ -52,7 +63,9 @@
  * PREFAILED may move one without moving `changes`), so every code a
  * remembered pass touched still sits where that pass left it.
  * tests/unit/test_dtcroute.c checks all of this against a reference that
- * reports every verdict and monitor every step.
+ * reports every verdict and monitor every step (but the DTCs over the
+ * budget, which it keeps per DTC in arrays), with budgets of 1, 2, 4 and
+ * 32.
  *
  * Faults for the manager (canfdi_dtcroute_manager_faults): a communication
  * fault while its trouble code has testFailed (qualified by the DTC memory's
@@ -71,9 +84,9 @@
  * Cost per canfdi_dtcroute_step: source 1's DTC masks only when the fault
  * masks differ from the last step's (then two table reads per fault with a
  * verdict); a report per DTC whose verdict changed, or per DTC with a
- * verdict when the memory changed (32 at most, each a canfdi_dtc_report; a
- * pass that would change nothing, canfdi_dtc_pass_is_noop, is counted
- * without the call); for source 3 a few compares in the steady state,
+ * verdict when the memory changed, verdicts_per_step at most (each a
+ * canfdi_dtc_report; a pass that would change nothing,
+ * canfdi_dtc_pass_is_noop, is counted without the call); for source 3 a few compares in the steady state,
  * else the monitor bits up to the highest one set (20 at most) and one
  * report per DTC they feed (collected as a bit mask, reported lowest
  * index first).
@@ -99,8 +112,12 @@
  * the 10 ms frames run in one step of ten, the 1 ms ones in every step). */
 #define CANFDI_DTCROUTE_S3_SETS 2U
 
+/* The product's budget of verdicts given per step (see the header). */
+#define CANFDI_DTCROUTE_VERDICTS_PER_STEP 4U
+
 typedef struct {
   uint16_t p2135_steps; /* 1..65535: unisolated disagreement until P2135 fails */
+  uint8_t verdicts_per_step; /* 1..32: sources 1-2's DTCs given per step at most */
 } canfdi_dtcroute_cfg_t;
 
 /* One step's verdicts. */

@@ -307,12 +307,19 @@ END_TEST
  * reference below has none of that: every step it combines each DTC's
  * verdict from the per-fault report (a failure dominating), applies P2135
  * and reports every DTC with a verdict and every monitor's code to a
- * second memory. Both memories must hold the same status bytes after every
- * step, and the manager's faults must equal a per-fault latch, over random
- * verdicts that hold for random spans (so that the steady state, its end
- * and the memory's own changes, clears and cycles, all occur). As in the
- * application, the verdicts of sources 1-2 are for faults other than the
- * communication ones, whose codes source 3 feeds (the header). */
+ * second memory, except the DTCs over the step's budget
+ * (cfg.verdicts_per_step): the reference keeps, per DTC, the verdict last
+ * given to its memory (none after a change of that memory from outside,
+ * or after a refused report), and of the DTCs whose verdict differs from
+ * it gives the failures first, then the passes, each lowest index first,
+ * up to the budget; the others wait. Both memories must hold the same
+ * status bytes after every step, and the manager's faults must equal a
+ * per-fault latch, over random verdicts that hold for random spans (so
+ * that the steady state, its end and the memory's own changes, clears and
+ * cycles, all occur), with budgets of 32 (never binding), 4 (the
+ * product's), 2 and 1. As in the application, the verdicts of sources 1-2
+ * are for faults other than the communication ones, whose codes source 3
+ * feeds (the header). */
 
 static uint32_t rng_state;
 
@@ -345,10 +352,18 @@ START_TEST(test_against_reference)
   uint32_t latched = 0U;
   uint32_t step;
   uint32_t changed = 0U;
+  uint32_t deferred = 0U;
+  int8_t given[CANFDI_CFG_DTC_MAX_DTCS];
+  uint32_t ref_changes;
+  bool ref_valid = false;
+  static const uint8_t budgets[4] = {32U, CANFDI_DTCROUTE_VERDICTS_PER_STEP, 2U, 1U};
   setup();
+  cfg.verdicts_per_step = budgets[_i % 4];
+  ck_assert_int_eq(canfdi_dtcroute_init(&r, &cfg, &dtc), CANFDI_OK);
   rng_state = 12345U + (uint32_t)_i;
   ck_assert_int_eq(canfdi_dtc_init(&ref, canfdi_dtc_defaults, (uint8_t)CANFDI_DTC_COUNT), CANFDI_OK);
   ck_assert_int_eq(canfdi_dtc_cycle_start(&ref), CANFDI_OK);
+  ref_changes = ref.changes;
   for (step = 0U; step < 6000U; step++) {
     canfdi_dtcroute_in_t in;
     int8_t agg[CANFDI_CFG_DTC_MAX_DTCS];
@@ -419,10 +434,38 @@ START_TEST(test_against_reference)
         /* not tested */
       }
     }
-    for (j = 0U; j < (uint32_t)ref.n_dtcs; j++) {
-      if (agg[j] != CANFDI_DIAG_REPORT_NONE) {
-        (void)canfdi_dtc_report(&ref, (uint8_t)j, (agg[j] > 0) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED,
-                                &ff);
+    /* what the reference's memory was last given no longer holds after
+     * a change from outside (a clear, a cycle) or a refused report */
+    if (!ref_valid || (ref.changes != ref_changes) || !ref.cycle_active) {
+      memset(given, CANFDI_DIAG_REPORT_NONE, sizeof given);
+    }
+    {
+      /* the due DTCs over the budget wait: failures first, then passes */
+      bool wait[CANFDI_CFG_DTC_MAX_DTCS];
+      uint32_t budget = cfg.verdicts_per_step;
+      int8_t pass;
+      memset(wait, 0, sizeof wait);
+      for (pass = CANFDI_DIAG_REPORT_FAILED; pass >= CANFDI_DIAG_REPORT_PASSED; pass -= 2) {
+        for (j = 0U; j < (uint32_t)ref.n_dtcs; j++) {
+          if ((agg[j] == pass) && (given[j] != agg[j])) {
+            if (budget > 0U) {
+              budget--;
+            } else {
+              wait[j] = true;
+              deferred++;
+            }
+          }
+        }
+      }
+      ref_valid = true;
+      for (j = 0U; j < (uint32_t)ref.n_dtcs; j++) {
+        given[j] = wait[j] ? CANFDI_DIAG_REPORT_NONE : agg[j];
+        if ((agg[j] != CANFDI_DIAG_REPORT_NONE) && !wait[j]) {
+          if (canfdi_dtc_report(&ref, (uint8_t)j, (agg[j] > 0) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED,
+                                &ff) < 0) {
+            ref_valid = false;
+          }
+        }
       }
     }
     /* source 3: per DTC, a failure of any of its monitors dominating */
@@ -439,8 +482,12 @@ START_TEST(test_against_reference)
       if (v != CANFDI_DIAG_REPORT_NONE) {
         (void)canfdi_dtc_report(&ref, (uint8_t)j, (v > 0) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED,
                                 &ff);
+        /* a monitor's report to a code with a verdict given: that verdict
+         * is given again */
+        ref_valid = ref_valid && (given[j] == CANFDI_DIAG_REPORT_NONE);
       }
     }
+    ref_changes = ref.changes;
     for (j = 0U; j < (uint32_t)ref.n_dtcs; j++) {
       const uint8_t st = (uint8_t)canfdi_dtc_status(&dtc, (uint8_t)j);
       ck_assert_msg(st == (uint8_t)canfdi_dtc_status(&ref, (uint8_t)j), "step %u DTC %u: %02x, reference %02x", step, j,
@@ -466,6 +513,9 @@ START_TEST(test_against_reference)
   }
   ck_assert_uint_ne(changed, 0U);
   ck_assert_uint_gt(r.diag.reports, 0U);
+  /* a binding budget was reached (the clears and cycles make every
+   * verdict due at once) */
+  ck_assert((cfg.verdicts_per_step >= 32U) ? (deferred == 0U) : (deferred > 0U));
 }
 END_TEST
 
