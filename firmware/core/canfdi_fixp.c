@@ -444,6 +444,35 @@ int32_t canfdi_div_s32_qn(int32_t num, int32_t den, unsigned n)
   return y;
 }
 
+uint32_t canfdi_div_u62_q30_rnd(uint64_t a, uint64_t b)
+{
+  /* u = a 2^33 (words w2:w1:0), v = b 2^2 (words v1:v0, v1 >= 2^31) */
+  const uint32_t w2 = (uint32_t)(a >> 31); /* < 2^31 <= v1: one digit */
+  const uint32_t w1 = (uint32_t)a << 1;
+  const uint64_t v = b << 2;
+  const uint32_t v1 = (uint32_t)(v >> 32);
+  const uint32_t v0 = (uint32_t)v;
+  uint32_t rhat;
+  uint32_t q2;
+  bool more = true;
+  unsigned k;
+  CANFDI_ASSERT((a >> 61) == 1U);
+  CANFDI_ASSERT((b >> 61) == 1U);
+  q2 = udiv_u64_u32(((uint64_t)w2 << 32) | w1, v1, &rhat);
+  /* u - q2 v = rhat 2^32 - q2 v0: negative while q2 v0 > rhat 2^32 (the
+   * estimate is too large, by 2 at most) */
+  for (k = 0U; (k < 2U) && more; k++) {
+    if (canfdi_umull32(q2, v0) > ((uint64_t)rhat << 32)) {
+      q2--;
+      more = (rhat <= (0xFFFFFFFFU - v1)); /* rhat + v1 >= 2^32: q2 is right */
+      rhat += v1;
+    } else {
+      more = false;
+    }
+  }
+  return (q2 >> 1) + (q2 & 1U);
+}
+
 /* |x| as an unsigned value; exact for INT64_MIN (2^63). */
 static uint64_t mag_u64(int64_t x)
 {

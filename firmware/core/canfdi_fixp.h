@@ -774,6 +774,24 @@ int32_t canfdi_div_s32_qn(int32_t num, int32_t den, unsigned n);
 int32_t canfdi_div_s64_sat_s32(int64_t num, int64_t den);
 
 /*
+ * round(a 2^30 / b), ties up, for a and b normalised to [2^61, 2^62): the
+ * mantissa of a ratio of two 62-bit magnitudes, in (2^29, 2^31].
+ * Scaling and overflow: q2 = floor(a 2^31 / b) < 2^32 is one quotient digit
+ * of a 95-bit by 64-bit division with the divisor normalised (a 2^33 /
+ * b 2^2): its estimate from the divisor's top word (one 64/32 division)
+ * exceeds it by at most 2, and the remainder test with the divisor's low
+ * word, exact for a two-word divisor, corrects it; the result is
+ * (q2 + 1) / 2 rounded down, which is round(a 2^30 / b) with ties up.
+ * Exact: the same bits as a bit-serial restoring division
+ * (tests/unit/test_fixp.c compares the two). Outside the domain the
+ * result is unspecified (an assertion in debug builds).
+ * Cost: one 64/32 division (two 32-bit divisions), two 32x32->64
+ * products, at most two corrections; the bit-serial loop it replaces took
+ * about 31 iterations of 64-bit shift, compare and subtract.
+ */
+uint32_t canfdi_div_u62_q30_rnd(uint64_t a, uint64_t b);
+
+/*
  * floor(sqrt(x)), exact for every uint32_t.
  * Scaling and overflow: integer in, integer out (a Q2k value gives a Qk
  * root); the result always fits (sqrt(2^32 - 1) < 2^16). Rounding: floor.

@@ -50,8 +50,7 @@ static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, 
     uint64_t a = neg ? ((uint64_t)(-(num + 1)) + 1U) : (uint64_t)num;
     uint64_t b = (uint64_t)den;
     int32_t e = (int32_t)num_frac - (int32_t)den_frac; /* f = 30 + e after normalisation */
-    uint64_t q = 0U;
-    unsigned i;
+    uint64_t q;
     /* a and b into [2^61, 2^62) by one shift each (their leading one to
      * bit 61: two leading zeros), the exponent following */
     {
@@ -64,22 +63,7 @@ static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, 
       e += ka - kb;
     }
     /* a / b in (1/2, 2): q = round(a / b * 2^30) in [2^29, 2^31]. */
-    if (a >= b) {
-      q = 1U;
-      a -= b;
-    }
-    for (i = 0U; i < 30U; i++) {
-      a <<= 1;
-      q <<= 1;
-      if (a >= b) {
-        a -= b;
-        q |= 1U;
-      }
-    }
-    a <<= 1;
-    if (a >= b) {
-      q += 1U;
-    }
+    q = canfdi_div_u62_q30_rnd(a, b);
     if (q >= ((uint64_t)1U << 31)) {
       q >>= 1; /* exact: q was 2^31 */
       e -= 1;

@@ -890,6 +890,83 @@ static void check_div_s64(int64_t num, int64_t den)
   EXPECT(got == ref_sat32(want), "div_s64_sat_s32(%lld, %lld) = %ld", (long long)num, (long long)den, (long)got);
 }
 
+/* round(a 2^30 / b), ties up, by the bit-serial restoring division that
+ * canfdi_div_u62_q30_rnd replaces: the reference. */
+static uint32_t ref_div_u62_q30_rnd(uint64_t a, uint64_t b)
+{
+  uint64_t r = a;
+  uint64_t q = 0U;
+  unsigned i;
+  if (r >= b) {
+    q = 1U;
+    r -= b;
+  }
+  for (i = 0U; i < 30U; i++) {
+    r <<= 1;
+    q <<= 1;
+    if (r >= b) {
+      r -= b;
+      q |= 1U;
+    }
+  }
+  r <<= 1;
+  if (r >= b) {
+    q += 1U;
+  }
+  return (uint32_t)q;
+}
+
+/* The ratio mantissa: the same bits as the reference at the domain's
+ * edges (a = b, either at its ends, neighbours, quotients next to a tie and
+ * to the estimate's corrections) and over random normalised pairs with
+ * every spread of low bits. */
+START_TEST(test_div_u62_q30_rnd)
+{
+  const uint64_t lo = (uint64_t)1 << 61;
+  const uint64_t hi = ((uint64_t)1 << 62) - 1U;
+  const uint64_t edge[] = {lo, lo + 1U, lo + 2U, hi, hi - 1U, hi - 2U, (uint64_t)3 << 60, ((uint64_t)3 << 60) - 1U,
+                           ((uint64_t)3 << 60) + 1U, lo | 0xFFFFFFFFU, lo | ((uint64_t)0xFFFFFFFFU << 29),
+                           hi & ~(uint64_t)0xFFFFFFFFU, lo + ((uint64_t)1 << 32), 0x2AAAAAAAAAAAAAAAU,
+                           0x3555555555555555U};
+  const size_t ne = sizeof edge / sizeof edge[0];
+  size_t i;
+  size_t j;
+  uint32_t k;
+  for (i = 0U; i < ne; i++) {
+    for (j = 0U; j < ne; j++) {
+      const uint32_t got = canfdi_div_u62_q30_rnd(edge[i], edge[j]);
+      ck_assert_msg(got == ref_div_u62_q30_rnd(edge[i], edge[j]), "a %016llx b %016llx: %08x, reference %08x",
+                    (unsigned long long)edge[i], (unsigned long long)edge[j], got,
+                    ref_div_u62_q30_rnd(edge[i], edge[j]));
+    }
+  }
+  rng_seed(0x62306271U);
+  for (k = 0U; k < 400000U; k++) {
+    const uint64_t r1 = rnd64();
+    const uint64_t r2 = rnd64();
+    /* low bits cleared now and then: divisors whose low word is 0, or a
+     * small multiple of the top word */
+    const unsigned z1 = (unsigned)((r1 >> 3) % 70U);
+    const unsigned z2 = (unsigned)((r2 >> 3) % 70U);
+    uint64_t a = lo | (r1 & (lo - 1U));
+    uint64_t b = lo | (r2 & (lo - 1U));
+    if (z1 < 61U) {
+      a &= ~((((uint64_t)1) << z1) - 1U);
+    }
+    if (z2 < 61U) {
+      b &= ~((((uint64_t)1) << z2) - 1U);
+    }
+    if ((k & 7U) == 0U) {
+      b = a + (uint64_t)(int64_t)(int32_t)(uint32_t)r2 % 64; /* ratios near 1 */
+      b = (b < lo) ? lo : ((b > hi) ? hi : b);
+    }
+    ck_assert_msg(canfdi_div_u62_q30_rnd(a, b) == ref_div_u62_q30_rnd(a, b), "a %016llx b %016llx",
+                  (unsigned long long)a, (unsigned long long)b);
+  }
+  DONE();
+}
+END_TEST
+
 START_TEST(test_div_s64_sat_s32)
 {
   size_t i;
@@ -1258,6 +1335,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_q31_div);
   tcase_add_loop_test(tc, test_div_s32_qn, 0, N_SHIFT_GROUPS);
   tcase_add_test(tc, test_div_s64_sat_s32);
+  tcase_add_test(tc, test_div_u62_q30_rnd);
   suite_add_tcase(s, tc);
 
   tc = tcase_create("sqrt");
