@@ -113,22 +113,24 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      15 338   16 891   21 785
- *   Cortex-M4 (an386)      15 339   16 895   21 788
- *   Cortex-M0 (microbit)   30 151   34 005   43 328
- * and at most 22 696 (M4) / 49 243 (M0) over the PIL scenarios. On the
- * M4 that is the step after a tester's ClearDiagnosticInformation (every
- * trouble code's verdict given again to the cleared memory, every status
- * sent); without one, at most 21 788 (the demo's step 2100, where the
- * first verdicts reach the trouble codes: the model rules' matching, the
- * codes' first PASSED, the EcuDtc frames). On the M0 it is a step with two RLS updates while
+ *   Cortex-M3 (an385)      15 338   16 886   21 235
+ *   Cortex-M4 (an386)      15 338   16 890   21 240
+ *   Cortex-M0 (microbit)   30 142   33 990   43 318
+ * and at most 21 720 (M4) / 49 233 (M0) over the PIL scenarios. On the
+ * M4 that is the model rules' matching while a fault is present and its
+ * trouble code is stored (dcm_ia_offset step 3050); the step where the
+ * first verdicts reach the trouble codes (step 2100 of every scenario)
+ * and the step after a tester's ClearDiagnosticInformation (21 606) come
+ * close: the DTC routing gives at most four verdicts a step
+ * (CANFDI_DTCROUTE_VERDICTS_PER_STEP), so the twenty codes that are due
+ * at once then are spread over five steps. On the M0 it is a step with two RLS updates while
  * dcm_ia_offset's fault is present (its RLS arithmetic is three times the
  * M4's). Where the instructions go, per module, per slot of the rate
  * schedule and in the costliest steps: `make bench-pil-profile`
  * (tests/pil/pil_profile.py; its split is summarised in
  * docs/requirements.md, requirement 1). A 1 ms step needs a Cortex-M4 of
  * roughly 35 MHz or more with margin (the worst step at ~1.2 cycles per
- * instruction: 28 MHz for the whole millisecond); on a Cortex-M0 at
+ * instruction: 27 MHz for the whole millisecond); on a Cortex-M0 at
  * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
  * halves, core/canfdi_fixp.h, and runs ~2.1 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
@@ -137,7 +139,7 @@
  * of tests/sil/scenarios/uds_workshop.scn): at most 19 900 (M4) / 39 500
  * (M0) in those steps; the clear's effect comes one step later (above).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 22 696 / 49 243,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 21 720 / 49 233,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
@@ -159,10 +161,10 @@
  * fault is named up to one period later than unscheduled; the hard rules'
  * faults at the same step.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
- * all of the application's RAM, static: 11 072 bytes on Cortex-M (740 of
- * them the diagnostic server, uds/canfdi_uds.h, 1 192 the calibration
+ * all of the application's RAM, static: 11 080 bytes on Cortex-M (740 of
+ * them the diagnostic server, uds/canfdi_uds.h, 1 224 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 584 B and 1 976 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 592 B and 1 976 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H
