@@ -448,7 +448,7 @@ uint32_t canfdi_div_u62_q30_rnd(uint64_t a, uint64_t b)
 {
   /* u = a 2^33 (words w2:w1:0), v = b 2^2 (words v1:v0, v1 >= 2^31) */
   const uint32_t w2 = (uint32_t)(a >> 31); /* < 2^31 <= v1: one digit */
-  const uint32_t w1 = (uint32_t)a << 1;
+  const uint32_t w1 = (uint32_t)(a << 1); /* a < 2^62: the shift loses no bit */
   const uint64_t v = b << 2;
   const uint32_t v1 = (uint32_t)(v >> 32);
   const uint32_t v0 = (uint32_t)v;
@@ -465,7 +465,7 @@ uint32_t canfdi_div_u62_q30_rnd(uint64_t a, uint64_t b)
     if (canfdi_umull32(q2, v0) > ((uint64_t)rhat << 32)) {
       q2--;
       more = (rhat <= (0xFFFFFFFFU - v1)); /* rhat + v1 >= 2^32: q2 is right */
-      rhat += v1;
+      rhat = more ? (rhat + v1) : rhat;
     } else {
       more = false;
     }

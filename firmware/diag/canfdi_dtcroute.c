@@ -185,7 +185,7 @@ static uint32_t lowest_bits(uint32_t x, uint32_t k)
   uint32_t rest = x;
   uint32_t n;
   for (n = 0U; (n < k) && (rest != 0U); n++) {
-    out |= rest & (0U - rest);
+    out |= rest & ~(rest - 1U); /* the lowest set bit (rest != 0) */
     rest &= rest - 1U;
   }
   return out;
@@ -293,10 +293,11 @@ static int32_t report_monitors(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, const ca
         }
       }
     }
-    if ((touched & (r->agg_last_fail | r->agg_last_pass)) != 0U) {
-      /* a code with a verdict of sources 1-2 (never in the product) */
-      r->agg_last_valid = false;
-    }
+    /* a code with a verdict of sources 1-2 (never in the product): that
+     * verdict is due again in the next step (a report changes its own code
+     * only, so the others' verdicts still hold) */
+    r->agg_last_fail &= ~touched;
+    r->agg_last_pass &= ~touched;
     while (touched != 0U) {
       const uint32_t low = touched & ~(touched - 1U); /* the lowest set bit */
       const uint32_t idx = (uint32_t)canfdi_ctz32(low);

@@ -34,10 +34,11 @@
  * the others as reported (most steps give none), as long as nothing else
  * touched those codes since: nothing outside the routing changed the memory
  * (its `changes` counter, which every status, clear, cycle and restored
- * image moves, is where the routing's last step left it) and source 3 did
- * not report to one of them (never in the product: the diagnosis gives no
+ * image moves, is where the routing's last step left it), and source 3 did
+ * not report to the code (never in the product: the diagnosis gives no
  * verdict for the communication faults and the manager detects none of
- * them, so the U-codes are source 3's alone). The routing's own reports
+ * them, so the U-codes are source 3's alone; such a code's verdict is due
+ * again in the next step, the others' still hold). The routing's own reports
  * to other codes do not count: a report changes its own code only, and a
  * displacement only the victim's CDTC and WIR, which no pass test reads.
  * Budget: a step gives at most cfg.verdicts_per_step of these DTCs

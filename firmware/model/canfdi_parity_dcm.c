@@ -29,15 +29,14 @@
  * The coefficient (num * 2^-num_frac) / (den * 2^-den_frac), normalised so
  * that |m| is in [2^29, 2^31), i.e. ~30 significant bits whatever the size.
  * Scaling and overflow: both magnitudes are shifted up to [2^61, 2^62) (the
- * shift counts go into the exponent), then 31 quotient bits come from a
- * restoring binary long division (remainder < 2^62, so r << 1 never
- * overflows), rounded half up on the next bit. No division instruction, no
- * 64-bit divide call. num == 0 or den <= 0 gives {0, 0}. A value too large
- * for f >= 0 saturates to {INT32_MAX, 0} (unreachable for parameters inside
- * the validated domain); a value below 2^-200 becomes 0.
- * Cost: a leading-zero count and one shift per operand, then 31
- * iterations of 64-bit compare/subtract/shift; run at init and when an R_A
- * block moves the estimate (four ratios then).
+ * shift counts go into the exponent), then the mantissa is their quotient
+ * in Q30 rounded half up (canfdi_div_u62_q30_rnd: exact, one 64/32
+ * division). No 64-bit divide call. num == 0 or den <= 0 gives {0, 0}. A
+ * value too large for f >= 0 saturates to {INT32_MAX, 0} (unreachable for
+ * parameters inside the validated domain); a value below 2^-200 becomes 0.
+ * Cost: a leading-zero count and one shift per operand, then the division
+ * (two 32-bit divisions: UDIV on ARMv7-M, __aeabi_uidiv on ARMv6-M); run at
+ * init and when an R_A block moves the estimate (four ratios then).
  */
 static canfdi_parity_dcm_coef_t pdcm_coef_ratio(int64_t num, unsigned num_frac, int64_t den,
                                                 unsigned den_frac)

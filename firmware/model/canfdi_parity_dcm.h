@@ -228,8 +228,8 @@
  * uncertainty bands (a 32x32->64 multiply, a run-time 64-bit shift and a
  * saturating add each) plus 11 rounded 32x32 multiplies by the dp, 4
  * canfdi_div_s32_qn (32/32 path while |r| < 1 unit, else 64/64), and every
- * ra_block_steps-th step the R_A update (4 long divisions of 31
- * iterations). `make bench-pil-profile` measures it in the application,
+ * ra_block_steps-th step the R_A update (4 ratios, each one 64/32
+ * division, canfdi_div_u62_q30_rnd). `make bench-pil-profile` measures it in the application,
  * per module and function (build/bench/pil_profile.json; the SVF steps,
  * the thresholds and the 64-bit helpers are counted under canfdi_svf,
  * canfdi_adapt, canfdi_fixp, canfdi_intrin and libgcc there): in the

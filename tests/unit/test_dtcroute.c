@@ -312,8 +312,10 @@ END_TEST
  * given to its memory (none after a change of that memory from outside,
  * or after a refused report), and of the DTCs whose verdict differs from
  * it gives the failures first, then the passes, each lowest index first,
- * up to the budget; the others wait. Both memories must hold the same
- * status bytes after every step, and the manager's faults must equal a
+ * up to the budget; the others wait (a monitor's report to a code makes
+ * its verdict due again). Both memories must hold the same
+ * status bytes and the routing must have counted the same reports after
+ * every step, and the manager's faults must equal a
  * per-fault latch, over random verdicts that hold for random spans (so
  * that the steady state, its end and the memory's own changes, clears and
  * cycles, all occur), with budgets of 32 (never binding), 4 (the
@@ -353,6 +355,7 @@ START_TEST(test_against_reference)
   uint32_t step;
   uint32_t changed = 0U;
   uint32_t deferred = 0U;
+  uint32_t ref_reports = 0U;
   int8_t given[CANFDI_CFG_DTC_MAX_DTCS];
   uint32_t ref_changes;
   bool ref_valid = false;
@@ -461,6 +464,7 @@ START_TEST(test_against_reference)
       for (j = 0U; j < (uint32_t)ref.n_dtcs; j++) {
         given[j] = wait[j] ? CANFDI_DIAG_REPORT_NONE : agg[j];
         if ((agg[j] != CANFDI_DIAG_REPORT_NONE) && !wait[j]) {
+          ref_reports++; /* given, or counted as given */
           if (canfdi_dtc_report(&ref, (uint8_t)j, (agg[j] > 0) ? CANFDI_DEB_REPORT_FAILED : CANFDI_DEB_REPORT_PASSED,
                                 &ff) < 0) {
             ref_valid = false;
@@ -483,11 +487,16 @@ START_TEST(test_against_reference)
         (void)canfdi_dtc_report(&ref, (uint8_t)j, (v > 0) ? CANFDI_DEB_REPORT_PREFAILED : CANFDI_DEB_REPORT_PREPASSED,
                                 &ff);
         /* a monitor's report to a code with a verdict given: that verdict
-         * is given again */
-        ref_valid = ref_valid && (given[j] == CANFDI_DIAG_REPORT_NONE);
+         * is due again */
+        given[j] = CANFDI_DIAG_REPORT_NONE;
+        ref_reports++;
       }
     }
     ref_changes = ref.changes;
+    /* every verdict and monitor result counted once: given, or counted as
+     * given (nothing changes), or waiting (not counted) */
+    ck_assert_msg(r.diag.reports == ref_reports, "step %u: %u reports, reference %u", step, r.diag.reports,
+                  ref_reports);
     for (j = 0U; j < (uint32_t)ref.n_dtcs; j++) {
       const uint8_t st = (uint8_t)canfdi_dtc_status(&dtc, (uint8_t)j);
       ck_assert_msg(st == (uint8_t)canfdi_dtc_status(&ref, (uint8_t)j), "step %u DTC %u: %02x, reference %02x", step, j,
@@ -525,6 +534,14 @@ START_TEST(test_bad_arguments)
   canfdi_dtcroute_cfg_t bad;
   setup();
   in = in_of(0U, false, false);
+  bad = cfg;
+  bad.verdicts_per_step = 0U;
+  ck_assert_int_eq(canfdi_dtcroute_init(&r, &bad, &dtc), -CANFDI_EINVAL);
+  bad.verdicts_per_step = 33U;
+  ck_assert_int_eq(canfdi_dtcroute_init(&r, &bad, &dtc), -CANFDI_EINVAL);
+  bad.verdicts_per_step = 32U;
+  ck_assert_int_eq(canfdi_dtcroute_init(&r, &bad, &dtc), CANFDI_OK);
+  bad = cfg;
   bad.p2135_steps = 0U;
   ck_assert_int_eq(canfdi_dtcroute_init(&r, &bad, &dtc), -CANFDI_EINVAL);
   ck_assert_int_eq(canfdi_dtcroute_step(&r, &dtc, &in), -CANFDI_EINVAL);

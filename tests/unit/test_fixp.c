@@ -957,7 +957,7 @@ START_TEST(test_div_u62_q30_rnd)
       b &= ~((((uint64_t)1) << z2) - 1U);
     }
     if ((k & 7U) == 0U) {
-      b = a + (uint64_t)(int64_t)(int32_t)(uint32_t)r2 % 64; /* ratios near 1 */
+      b = a + (uint64_t)((int64_t)(r2 & 0x7FU) - 64); /* ratios near 1, either side */
       b = (b < lo) ? lo : ((b > hi) ? hi : b);
     }
     ck_assert_msg(canfdi_div_u62_q30_rnd(a, b) == ref_div_u62_q30_rnd(a, b), "a %016llx b %016llx",
