@@ -868,6 +868,17 @@ static void check_div_s32_qn(unsigned n, int it)
     EXPECT(got == ref_sat32(want), "div_s32_qn(%ld, %ld, %u) = %ld", (long)num, (long)den, n,
            (long)got);
   }
+  /* divisors below 2^24 with dividends of every size (the 8-bit digit
+   * path, quotients up to the saturation and just over it) */
+  for (k = 0U; k < 20000U; k++) {
+    const int32_t num = rnd_s32();
+    const int32_t den = rnd_s32() / 256;
+    const i128 want = (den == 0) ? ref_div0(num, INT32_MIN, INT32_MAX)
+                                 : ref_div_away((i128)num * ((i128)1 << nref), den);
+    const int32_t got = canfdi_div_s32_qn(num, den, n);
+    EXPECT(got == ref_sat32(want), "div_s32_qn(%ld, %ld, %u) = %ld", (long)num, (long)den, n,
+           (long)got);
+  }
 }
 
 START_TEST(test_div_s32_qn)
