@@ -113,15 +113,15 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      15 341   16 889   21 236
- *   Cortex-M4 (an386)      15 341   16 893   21 241
- *   Cortex-M0 (microbit)   30 146   33 993   43 322
- * and at most 21 721 (M4) / 49 236 (M0) over the PIL scenarios. On the
+ *   Cortex-M3 (an385)      15 338   16 886   21 233
+ *   Cortex-M4 (an386)      15 339   16 890   21 238
+ *   Cortex-M0 (microbit)   30 142   33 989   43 317
+ * and at most 21 718 (M4) / 49 231 (M0) over the PIL scenarios. On the
  * M4 that is the model rules' matching while a fault is present and its
  * trouble code is stored (dcm_ia_offset step 3050); the step where the
  * first verdicts reach the trouble codes (step 2100 of every scenario)
- * and the step after a tester's ClearDiagnosticInformation come close:
- * the DTC routing gives at most four verdicts a step
+ * and the step after a tester's ClearDiagnosticInformation (21 593) come
+ * close: the DTC routing gives at most four verdicts a step
  * (CANFDI_DTCROUTE_VERDICTS_PER_STEP), so the twenty codes that are due
  * at once then are spread over five steps. On the M0 it is a step with two RLS updates while
  * dcm_ia_offset's fault is present (its RLS arithmetic is three times the
@@ -139,7 +139,7 @@
  * of tests/sil/scenarios/uds_workshop.scn): at most 19 900 (M4) / 39 500
  * (M0) in those steps; the clear's effect comes one step later (above).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 21 721 / 49 236,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 21 718 / 49 231,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
