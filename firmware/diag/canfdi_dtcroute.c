@@ -85,6 +85,17 @@ int32_t canfdi_dtcroute_init(canfdi_dtcroute_t *r, const canfdi_dtcroute_cfg_t *
   return rc;
 }
 
+/* The number of bits set in x. */
+static uint32_t bit_count(uint32_t x)
+{
+  uint32_t n = 0U;
+  uint32_t rest;
+  for (rest = x; rest != 0U; rest &= rest - 1U) {
+    n++;
+  }
+  return n;
+}
+
 /* Source 1: the DTCs of the faults with a verdict, as two DTC masks (a DTC
  * fails if any fault that feeds it fails, else passes if any passes), and
  * how many DTCs have one. A function of the two fault masks alone: kept
@@ -113,9 +124,7 @@ static void combine_faults(canfdi_dtcroute_t *r, uint32_t failed, uint32_t passe
       }
     }
     pm &= ~fm;
-    for (x = fm | pm; x != 0U; x &= x - 1U) {
-      n++;
-    }
+    n = bit_count(fm | pm);
     r->src1_in_fail = failed;
     r->src1_in_pass = passed;
     r->src1_fail = fm;
@@ -206,7 +215,6 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
   uint32_t x;
   uint32_t left;
   uint32_t given = 0U;
-  uint32_t n_left = 0U;
   if (r->agg_last_valid && dtc->cycle_active) {
     due &= (fm ^ r->agg_last_fail) | (pm ^ r->agg_last_pass);
   }
@@ -215,12 +223,8 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
   if (due != 0U) {
     /* most steps have none due */
     x = lowest_bits(due & fm, r->cfg.verdicts_per_step);
-    for (left = x; left != 0U; left &= left - 1U) {
-      given++;
-    }
-    x |= lowest_bits(due & ~fm, (uint32_t)r->cfg.verdicts_per_step - given);
+    x |= lowest_bits(due & ~fm, (uint32_t)r->cfg.verdicts_per_step - bit_count(x));
     left = due & ~x;
-    given = 0U;
   }
   if ((x & r->s3_dtcs) != 0U) {
     /* a code source 3 feeds gets a verdict (never in the product) */
@@ -241,10 +245,7 @@ static int32_t report_verdicts(canfdi_dtcroute_t *r, canfdi_dtc_t *dtc, uint32_t
       given++;
     }
   }
-  for (x = left; x != 0U; x &= x - 1U) {
-    n_left++;
-  }
-  canfdi_count_add(&r->diag.reports, (n_agg - given) - n_left);
+  canfdi_count_add(&r->diag.reports, (n_agg - given) - bit_count(left));
   r->agg_last_fail = fm & ~left;
   r->agg_last_pass = pm & ~left;
   r->agg_last_valid = (rc == 0);

@@ -87,8 +87,8 @@
  * verdict); a report per DTC whose verdict changed, or per DTC with a
  * verdict when the memory changed, verdicts_per_step at most (each a
  * canfdi_dtc_report; a pass that would change nothing,
- * canfdi_dtc_pass_is_noop, is counted without the call); for source 3 a few compares in the steady state,
- * else the monitor bits up to the highest one set (20 at most) and one
+ * canfdi_dtc_pass_is_noop, is counted without the call); for source 3 a
+ * few compares in the steady state, else the monitor bits up to the highest one set (20 at most) and one
  * report per DTC they feed (collected as a bit mask, reported lowest
  * index first).
  * manager_faults: a few mask operations, and a status read per
