@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 import gzip
+import io
 import itertools
 import json
 import subprocess
@@ -303,8 +304,7 @@ def test_truncated_files_of_every_format(suffix: str, ia_log: Path, tmp_path: Pa
     if suffix in (".asc", ".trc"):
         # inside the data bytes of the line at two thirds (the last quarter of its columns), so
         # that where the cut falls does not depend on the header's length (the TRC header holds
-        # the file's path); a line cut right after its identifier is not reported yet (the ASC
-        # reader takes it for an event line that holds no frame)
+        # the file's path); every cut inside a line: test_a_last_line_cut_anywhere_is_reported
         start = data.rfind(b"\n", 0, at) + 1
         end = data.find(b"\n", at)
         at = start + (end - start) * 3 // 4
@@ -478,3 +478,38 @@ def test_forged_recorded_ecu_dtc_frames_are_not_the_ecus(ia_log: Path, reference
     # the wrong CRC; two forged in sequence and the ECU's frame after each
     assert doc["data_quality"][0]["recorded_ecu_dtc_frames_failing_e2e"] == 5
     assert "5 recorded EcuDtc frame(s) forged or corrupted" in out
+
+
+@pytest.mark.parametrize("suffix", [".asc", ".trc", ".csv"])
+def test_a_last_line_cut_anywhere_is_reported(suffix: str, tmp_path: Path) -> None:
+    """A text log cut at every byte of its last frame line: the line gives its whole frame (cut
+    after the data bytes) or is reported by its number and gives none (a line cut after its time
+    stamp or identifier reads like an event line to the ASC reader, one cut inside its last data
+    byte gives a wrong byte, one cut between bytes too few); never a frame lost or changed
+    without a word."""
+    from canfdi.replay_input import Problems, numbered_messages, write_candump
+
+    full = tmp_path / f"full{suffix}"
+    with can.Logger(str(full)) as w:
+        for i in range(6):
+            w.on_message_received(can.Message(timestamp=1.0 + i * 0.01, arbitration_id=0x100 + i, channel=0,
+                                              data=bytes(range(i, i + 8)), is_extended_id=False))
+    data = full.read_bytes()
+    whole = [(pos, bytes(m.data)) for pos, m in numbered_messages(full, suffix[1:], Problems())]
+    assert len(whole) == 6
+    last_no = whole[-1][0]  # the last frame's line (an ASC trailer follows it)
+    end = sum(len(ln) for ln in data.splitlines(keepends=True)[:last_no - 1])
+    stop = data.find(b"\n", end)
+    for at in range(end, stop):
+        if not data[end:at].strip():
+            continue  # only the line's leading blanks: a whole file of five frames
+        cut = tmp_path / f"cut{suffix}"
+        cut.write_bytes(data[:at])
+        problems = Problems()
+        out = io.StringIO()
+        n = write_candump(numbered_messages(cut, suffix[1:], problems), out, cut, problems, suffix[1:])
+        lines = [p[1] for p in problems.items]
+        if n == 6:  # cut after the data bytes (ASC's trailing columns): the whole frame, no word
+            assert not lines and out.getvalue().splitlines()[-1].endswith(whole[-1][1].hex().upper()), (at, out)
+        else:
+            assert n == 5 and lines == [last_no], (at, data[end:at], problems.items)

@@ -179,6 +179,34 @@ def _frame_expected(fmt: str, line: str, n: int) -> bool:
     return n > 1                     # csv: the header line
 
 
+def _cut_line(fmt: str, line: str) -> bool:
+    """The file ends inside this line: no line end, and not a line that holds no frame by design.
+    Such a last line may be whole (some tools write no line end after the last line) or cut: an
+    ASC line cut after its time stamp or identifier reads as an event line (no frame, no word),
+    so one that gives no frame is reported; one that gives a frame is checked by _cut_in_a_byte."""
+    if line.endswith("\n"):
+        return False
+    s = line.strip()
+    if not s:
+        return False
+    if fmt == "asc":
+        return not _ASC_NOT_A_FRAME.match(s)
+    if fmt == "trc":
+        return not s.startswith(";")
+    return True
+
+
+def _cut_in_a_byte(line: str, msg: can.Message) -> bool:
+    """A frame read from a last line without line end whose last column is one hex digit, the
+    value of its last data byte: the line was cut inside that byte ("0C" cut to "0" reads as 0x00,
+    a whole frame with a wrong byte; a cut between bytes gives too few bytes, see short_data)."""
+    cols = line.split()
+    return (bool(cols) and len(cols[-1]) == 1 and len(msg.data) > 0
+            and cols[-1] in "0123456789abcdefABCDEF" and int(cols[-1], 16) == msg.data[-1])
+
+
+_CUT_WHY = "the file ends inside this line (no line end): the log is cut here; no frame is read from it"
+
 _SKIPPED_WHY = {
     "asc": "python-can's ASCReader reads no frame from this line; skipped",
     "trc": "python-can's TRCReader reads no frame from this line (an error frame or another event type it "
@@ -203,19 +231,23 @@ class _CountingLines:
         self.skipped = skipped
         self.pending = 0
         self.pending_text = ""
+        self.pending_why = ""
         self.last = ""
+        self.cut = False  # the current line is the file's last and has no line end
 
     def _seen(self, line: str) -> None:
         self.flush()
         self.n += 1
         self.last = line
-        if _frame_expected(self.fmt, line, self.n):
+        self.cut = _cut_line(self.fmt, line)
+        if self.cut or _frame_expected(self.fmt, line, self.n):
             self.pending = self.n
             self.pending_text = line
+            self.pending_why = _CUT_WHY if self.cut else _SKIPPED_WHY[self.fmt]
 
     def flush(self) -> None:
         if self.pending:
-            self.skipped(self.pending, _SKIPPED_WHY[self.fmt], self.pending_text)
+            self.skipped(self.pending, self.pending_why, self.pending_text)
             self.pending = 0
 
     def gave_frame(self) -> None:
@@ -314,14 +346,17 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
         while True:
             try:
                 for msg in reader:
+                    if lines.cut and _cut_in_a_byte(lines.last, msg):
+                        lines.flush()  # a frame with a wrong last byte: reported, not used
+                        continue
                     lines.gave_frame()
                     yield lines.n, msg
                 lines.flush()
                 return
             except (ValueError, IndexError, KeyError, TypeError, OverflowError) as e:
                 lines.reported()
-                problems.add(path, lines.n, f"python-can's {cls.__name__} cannot read this line "
-                             f"({type(e).__name__}: {e}); skipped", lines.last)
+                why = f"python-can's {cls.__name__} cannot read this line ({type(e).__name__}: {e})"
+                problems.add(path, lines.n, f"{_CUT_WHY} ({why})" if lines.cut else f"{why}; skipped", lines.last)
             except (OSError, EOFError, gzip.BadGzipFile) as e:
                 lines.reported()
                 problems.add(path, lines.n, f"read error, the rest of the file is lost: {e}")
