@@ -22,6 +22,7 @@ void canfdi_app_out_init(canfdi_app_out_t *o, const canfdi_dtc_t *dtc)
     o->dtc_status_sent[i] = (st >= 0) ? (uint8_t)st : 0U;
   }
   o->dtc_changes_seen = dtc->changes;
+  o->dtc_behind = false;
   o->n_stored = (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TFSLC);
   o->n_failed = (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TF);
   o->rr_frames = 0U;
@@ -40,11 +41,12 @@ void canfdi_app_out_port_timing(canfdi_app_out_t *o, uint32_t step_us, uint32_t 
 /* On change: one EcuDtc per DTC whose status differs from the last sent,
  * and the number of stored (TFSLC) and failed (TF) codes the frames carry,
  * all from one pass over the statuses. A status changes only with
- * dtc->changes (canfdi_dtc.h): while that has not moved there is nothing
- * to look for and the counts stand. */
+ * dtc->changes (canfdi_dtc.h): while that has not moved, and no change
+ * waits for room in the queue, there is nothing to look for and the
+ * counts stand. */
 static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc_t *dtc)
 {
-  if (dtc->changes != o->dtc_changes_seen) {
+  if ((dtc->changes != o->dtc_changes_seen) || o->dtc_behind) {
     uint32_t changed = 0U;
     uint32_t stored = 0U;
     uint32_t failed = 0U;
@@ -58,6 +60,7 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
     o->dtc_changes_seen = dtc->changes;
     o->n_stored = (uint8_t)stored; /* <= n_dtcs */
     o->n_failed = (uint8_t)failed;
+    o->dtc_behind = false;
     while (changed != 0U) {
       canfdi_tx_dtc_t ev;
       j = (uint32_t)canfdi_ctz32(changed);
@@ -69,10 +72,14 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
       ev.count = o->n_stored;
       if (canfdi_tx_dtc_event(tx, &ev) == CANFDI_OK) {
         canfdi_count_inc(&o->diag.dtc_events);
+        o->dtc_status_sent[j] = ev.status;
       } else {
-        canfdi_count_inc(&o->diag.dtc_events_lost);
+        /* the queue is full (it sends one a step): this change and the
+         * rest stay unsent and are looked for again next step */
+        canfdi_count_inc(&o->diag.dtc_queue_full);
+        o->dtc_behind = true;
+        changed = 0U;
       }
-      o->dtc_status_sent[j] = ev.status;
     }
   }
 }

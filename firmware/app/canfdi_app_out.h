@@ -12,6 +12,11 @@
  *   on change   every step, each DTC whose status byte differs from the
  *               last one sent is queued (canfdi_tx_dtc_event), in table
  *               order, with its occurrence counter and the stored count;
+ *               the queue (CANFDI_CFG_TX_DTC_QUEUE, 8) sends one a step,
+ *               so when more change at once (a tester's clear changes
+ *               every code) the rest wait, unsent, and are queued in the
+ *               next steps with the status they have then: no change is
+ *               lost, one that is undone before its turn is not sent;
  *   cyclic      every 100 ms one stored code (testFailedSinceLastClear),
  *               round robin: the n-th cyclic frame since init shows stored
  *               code number n modulo the number stored. n is a state of
@@ -66,7 +71,7 @@ typedef struct {
 typedef struct {
   uint32_t frames_sent;
   uint32_t dtc_events;        /* on-change EcuDtc frames queued */
-  uint32_t dtc_events_lost;   /* queue full: the change is not sent */
+  uint32_t dtc_queue_full;    /* steps whose changes waited for room in the queue */
 } canfdi_app_out_diag_t;
 
 typedef struct {
@@ -75,6 +80,7 @@ typedef struct {
                                 * a status changes only with it */
   uint8_t n_stored;            /* codes with TFSLC, as of dtc_changes_seen */
   uint8_t n_failed;            /* codes with TF, as of dtc_changes_seen */
+  bool dtc_behind;             /* changes waiting for room in the queue */
   uint32_t rr_frames;          /* cyclic EcuDtc frames composed (wraps by intent) */
   uint32_t step_time_max_us;   /* port timing since the last EcuStatus */
   uint32_t cycle_time_max_us;

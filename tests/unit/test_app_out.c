@@ -66,10 +66,17 @@ static void fail_code(uint32_t code)
   ck_assert_int_ge(canfdi_dtc_report(&dtc, (uint8_t)canfdi_dtc_find(&dtc, code), CANFDI_DEB_REPORT_FAILED, &ff), 0);
 }
 
+static void pass_code(uint32_t code)
+{
+  canfdi_dtc_ff_t ff;
+  memset(&ff, 0, sizeof ff);
+  ck_assert_int_ge(canfdi_dtc_report(&dtc, (uint8_t)canfdi_dtc_find(&dtc, code), CANFDI_DEB_REPORT_PASSED, &ff), 0);
+}
+
 typedef struct {
   uint32_t cyclic[64];
   unsigned n_cyclic;
-  uint32_t change[16];
+  uint32_t change[64];
   unsigned n_change;
   unsigned n_status;
 } seen_t;
@@ -93,7 +100,7 @@ static void run(uint32_t steps, seen_t *s)
           (canfdi_sil_msg_ecu_dtc_unpack(&m, out[i].data, out[i].dlc) != 0)) {
         continue;
       }
-      if ((m.dtc_tx_reason != 0U) && (s->n_change < 16U)) {
+      if ((m.dtc_tx_reason != 0U) && (s->n_change < 64U)) {
         s->change[s->n_change++] = m.dtc_code;
       } else if ((m.dtc_tx_reason == 0U) && (s->n_cyclic < 64U)) {
         s->cyclic[s->n_cyclic++] = m.dtc_code;
@@ -123,6 +130,55 @@ START_TEST(test_dtc_frames)
     ck_assert_uint_eq(s.cyclic[i], ((o.rr_frames - 6U + i) % 2U == 0U) ? CANFDI_DTC_P0122 : CANFDI_DTC_P1A20);
   }
   ck_assert_uint_eq(o.diag.dtc_events, 2U);
+}
+END_TEST
+
+/* More changes in one step than the queue holds (it sends one a step):
+ * every change goes out, once, in the next steps; a change undone before
+ * its turn is not sent. */
+START_TEST(test_dtc_burst_not_lost)
+{
+  seen_t s;
+  const unsigned n = 12U; /* > CANFDI_CFG_TX_DTC_QUEUE */
+  unsigned i;
+  unsigned k;
+  setup();
+  run(10U, &s);
+  for (i = 0U; i < n; i++) {
+    fail_code(dtc.table[i].dtc);
+  }
+  run(1U, &s);
+  ck_assert_uint_ge(o.diag.dtc_queue_full, 1U); /* the rest wait */
+  run(100U, &s);
+  ck_assert_uint_eq(s.n_change, n - 1U); /* the first went out in the step before */
+  for (i = 1U; i < n; i++) {
+    unsigned hits = 0U;
+    for (k = 0U; k < s.n_change; k++) {
+      hits += (s.change[k] == dtc.table[i].dtc) ? 1U : 0U;
+    }
+    ck_assert_msg(hits == 1U, "code %06x sent %u times", dtc.table[i].dtc, hits);
+  }
+  ck_assert_uint_eq(o.diag.dtc_events, n);
+  /* a second burst (passes: no storage, no displacement); after one step
+   * 8 are queued (one of them sent) and 4 wait; then the tester clears:
+   * the queued ones go out as they were queued, then every code whose
+   * status is no longer the one sent (the first burst's 12 and the 8
+   * queued); the 4 waiting are back to the status sent and never go out */
+  for (i = 0U; i < n; i++) {
+    pass_code(dtc.table[n + i].dtc);
+  }
+  run(1U, &s);
+  ck_assert_uint_eq(s.n_change, 1U);
+  ck_assert(o.dtc_behind);
+  ck_assert_int_eq(canfdi_dtc_clear(&dtc, CANFDI_DTC_GROUP_ALL), CANFDI_OK);
+  run(100U, &s);
+  ck_assert_uint_eq(s.n_change, (CANFDI_CFG_TX_DTC_QUEUE - 1U) + n + CANFDI_CFG_TX_DTC_QUEUE);
+  for (k = 0U; k < s.n_change; k++) {
+    for (i = n + CANFDI_CFG_TX_DTC_QUEUE; i < (2U * n); i++) {
+      ck_assert_uint_ne(s.change[k], dtc.table[i].dtc);
+    }
+  }
+  ck_assert(!o.dtc_behind);
 }
 END_TEST
 
@@ -161,6 +217,7 @@ static Suite *make_suite(void)
   Suite *s = suite_create("app_out");
   TCase *tc = tcase_create("frames");
   tcase_add_test(tc, test_dtc_frames);
+  tcase_add_test(tc, test_dtc_burst_not_lost);
   tcase_add_test(tc, test_loaded_memory_announced);
   tcase_add_test(tc, test_port_timing);
   suite_add_tcase(s, tc);
