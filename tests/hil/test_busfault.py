@@ -457,10 +457,17 @@ def forged_frames(i: int) -> list[tuple[int, bytes]]:
     return [(ID_STATUS, st), (ID_DIAG, dg), (ID_DTC, dt), (ID_ACT_DCM, bytes(act))]
 
 
-def read_dids() -> dict[int, object]:
-    with uds.connect(uds_args()) as t:
-        r = uds.check(t.c.read_data_by_identifier([0xD400, 0xD401, 0xD500, 0xD502, 0xD503]), "0x22")
-        return dict(r.service_data.values)
+def read_dids(tries: int = 1) -> dict[int, object]:
+    """The ECU's degradation states and counters (0x22); tries as in dtc_memory."""
+    for k in range(tries):
+        try:
+            with uds.connect(uds_args()) as t:
+                r = uds.check(t.c.read_data_by_identifier([0xD400, 0xD401, 0xD500, 0xD502, 0xD503]), "0x22")
+                return dict(r.service_data.values)
+        except udsoncan.exceptions.TimeoutException:
+            if k + 1 == tries:
+                raise
+    raise AssertionError("unreachable")
 
 
 _forged: dict[bool, dict] = {}
@@ -481,7 +488,9 @@ def forged_run(stored_nvm: Path, actuator: bool) -> dict:
         fiu = rig.fiu
         assert fiu is not None
         rig.wait_s(1.0)
-        before, dids_before = dtc_memory(), read_dids()
+        # the reads may be asked again (as in test_interface_down_for_6_s_in_real_time):
+        # this test judges what the ECU holds, not the server's timing
+        before, dids_before = dtc_memory(tries=3), read_dids(tries=3)
         node = can_sock(BENCH, [])
         k0 = fiu.step
         t_end, i = time.monotonic() + 1.5, 0
@@ -495,7 +504,7 @@ def forged_run(stored_nvm: Path, actuator: bool) -> dict:
         k1 = fiu.step
         node.close()
         fiu.wait_step(k1 + 300, rig.procs)
-        after, dids_after = dtc_memory(), read_dids()
+        after, dids_after = dtc_memory(tries=3), read_dids(tries=3)
         log, st = rig.finish()
     finally:
         rig.close()
