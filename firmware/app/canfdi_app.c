@@ -556,14 +556,12 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     stage_control(app, &u_dcm, &u_thr); /* 3. */
     stage_detect(app);                 /* 4. */
     stage_diagnose(app);               /* 5. */
-    if (app->slot == CANFDI_APP_SLOT_DIAG) {
-      /* 6. the full diagnosis in its slot of the rate schedule
-       * (canfdi_app.h); the hard rules in every other step, the model
-       * rules' verdicts held between full steps */
-      canfdi_diagnosis_step(&app->diagnosis, &app->sym, NULL);
-    } else {
-      canfdi_diagnosis_step_hard(&app->diagnosis, &app->sym, NULL);
-    }
+    /* 6. each component's model rules matched in its slot of the rate
+     * schedule (canfdi_app.h); the hard rules in every step, a
+     * component's model verdicts held between its full steps */
+    canfdi_diagnosis_step_comp(&app->diagnosis, &app->sym, NULL,
+                               ((app->slot == CANFDI_APP_SLOT_DIAG) ? (1U << CANFDI_DIAG_COMP_DCM) : 0U) |
+                                   ((app->slot == app->slot_diag_thr) ? (1U << CANFDI_DIAG_COMP_THR) : 0U));
     stage_dtc(app);                    /* 7. */
     stage_manage(app, u_dcm, u_thr);   /* 8. */
     update_feedback(app);

@@ -154,12 +154,13 @@
  * filters are 1 ms filters), the diagnosis' flags, symptom persistence
  * and hard rules (canfdi_diagnosis_step_hard), DTC routing (it takes
  * one-step events: a rejected frame, a timeout, the manager's findings),
- * actuator manager, outputs, server. In slot CANFDI_APP_SLOT_DIAG of every
- * cal.diag_period_steps (default 10): the model rules' matching
- * (canfdi_diagnosis_step), its isolation count converted from 1 ms steps
- * at init (rounded up); between its runs its verdicts hold. A model-based
- * fault is named up to one period later than unscheduled; the hard rules'
- * faults at the same step.
+ * actuator manager, outputs, server. Once every cal.diag_period_steps
+ * (default 10) for each component: its model rules' matching
+ * (canfdi_diagnosis_step_comp), the DC motor's in slot
+ * CANFDI_APP_SLOT_DIAG, the throttle's in slot 4 (below), the isolation
+ * count converted from 1 ms steps at init (rounded up); between its runs a
+ * component's verdicts hold. A model-based fault is named up to one period
+ * later than unscheduled; the hard rules' faults at the same step.
  * Memory: sizeof(canfdi_app_t) is printed by `canfdi-sil --sizes` (host);
  * all of the application's RAM, static: 11 080 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 224 the calibration
@@ -203,6 +204,16 @@
  * every cal.diag_period_steps (see the header, rate schedule). */
 #define CANFDI_APP_FRAME_SLOTS 10U
 #define CANFDI_APP_SLOT_DIAG 0U
+/* The model rules are matched per component (canfdi_diagnosis_step_comp):
+ * the DC motor's in slot CANFDI_APP_SLOT_DIAG, the throttle's in slot
+ * diag_period_steps * 2 / 5 (4 at the default period of 10, a slot with
+ * the throttle's cheaper electrical update only: never with the DC motor's
+ * updates or the throttle's mechanical one; 0 at periods 1 and 2, where both
+ * share slot 0). One matching costs about 1 400 instructions on the M4
+ * with symptoms present (`make bench-pil-profile`): split, neither slot
+ * carries both. */
+#define CANFDI_APP_SLOT_DIAG_THR_NUM 2U
+#define CANFDI_APP_SLOT_DIAG_THR_DEN 5U
 /* The estimators' RLS updates on fixed slots (canfdi_est_thr_align,
  * canfdi_est_dcm_align). The throttle's electrical update on the slots
  * with slot mod decim = CANFDI_APP_SLOT_EST_THR (the even ones at its
@@ -347,6 +358,8 @@ typedef struct {
   canfdi_app_diag_t diag;
   uint8_t slot;         /* this step's slot: steps since power-up modulo
                          * cal.diag_period_steps */
+  uint8_t slot_diag_thr; /* the throttle's matching slot for this period
+                          * (CANFDI_APP_SLOT_DIAG_THR) */
   uint8_t est_k[2];     /* the DC motor's (0) and the throttle's (1)
                          * estimator: this step's step of its schedule,
                          * modulo its decim (CANFDI_APP_EST_UNLOCKED: it

@@ -47,6 +47,7 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
     dc.isolate_steps = per_period(dc.isolate_steps, period);
   }
   app->slot = 0U;
+  app->slot_diag_thr = (uint8_t)(((uint32_t)period * CANFDI_APP_SLOT_DIAG_THR_NUM) / CANFDI_APP_SLOT_DIAG_THR_DEN);
   if ((rc == CANFDI_OK) && ((canfdi_rx_init(&app->rx, &c->rx, now_us) != CANFDI_OK) || (canfdi_tx_init(&app->tx) != CANFDI_OK) ||
       (canfdi_ctrl_dcm_init(&app->ctrl_dcm, &c->ctrl_dcm) != CANFDI_OK) ||
       (canfdi_ctrl_thr_init(&app->ctrl_thr, &c->ctrl_thr) != CANFDI_OK) ||

@@ -881,23 +881,36 @@ static void component_match(canfdi_diagnosis_t *d, uint32_t c, uint8_t prev_isol
   model_verdicts(c, V_NONE, res->isolated, v);
 }
 
-/* Phase 2: per component, hard rule, quiet or matching. */
-static void component_phase(canfdi_diagnosis_t *d, verdicts_t *v)
+/* Phase 2 of a component whose model rules are matched in this step: hard
+ * rule, quiet or matching. Every model rule of c gets its verdict here. */
+static void component_full(canfdi_diagnosis_t *d, uint32_t c, verdicts_t *v)
 {
-  uint32_t c;
-  for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+  canfdi_diagnosis_result_t *res = &d->res[c];
+  const uint8_t prev_isolated = res->isolated;
+  const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && vfailed(&v->h, prev_isolated);
+  observe(d, c);
+  res->detected = v->hard_any[c] || ((d->obs_pos | d->obs_neg) != 0U);
+  if (v->hard_any[c]) {
+    component_hard(d, c, prev_hard, v);
+  } else if (!res->detected) {
+    component_quiet(d, c, v);
+  } else {
+    component_match(d, c, prev_isolated, v);
+  }
+}
+
+/* Phase 2 of a component between its full steps: one whose hard rule fires
+ * is cleared as in a full step (its model verdicts NONE until its next
+ * one); otherwise it keeps its last full step's result and model
+ * verdicts. */
+static void component_between(canfdi_diagnosis_t *d, uint32_t c, verdicts_t *v)
+{
+  if (v->hard_any[c]) {
     canfdi_diagnosis_result_t *res = &d->res[c];
     const uint8_t prev_isolated = res->isolated;
     const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && vfailed(&v->h, prev_isolated);
-    observe(d, c);
-    res->detected = v->hard_any[c] || ((d->obs_pos | d->obs_neg) != 0U);
-    if (v->hard_any[c]) {
-      component_hard(d, c, prev_hard, v);
-    } else if (!res->detected) {
-      component_quiet(d, c, v);
-    } else {
-      component_match(d, c, prev_isolated, v);
-    }
+    res->detected = true;
+    component_hard(d, c, prev_hard, v);
   }
 }
 
@@ -937,26 +950,13 @@ static void report_phase(canfdi_diagnosis_t *d, const verdicts_t *v, int8_t repo
   }
 }
 
-/* Between full steps: a component whose hard rule fires is cleared as in
- * a full step (its model verdicts NONE until the next one); the others
- * keep the last full step's result and model verdicts. */
-static void hard_components(canfdi_diagnosis_t *d, verdicts_t *v)
-{
-  uint32_t c;
-  for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
-    canfdi_diagnosis_result_t *res = &d->res[c];
-    const uint8_t prev_isolated = res->isolated;
-    if (v->hard_any[c]) {
-      const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && vfailed(&v->h, prev_isolated);
-      res->detected = true;
-      component_hard(d, c, prev_hard, v);
-    }
-  }
-}
-
-/* One step; model: a full step (the model rules' matching), else a step of
- * the hard rules with the last full step's model verdicts. */
-static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[], bool model)
+/* One step; bit c of `model`: component c's full step (its model rules'
+ * matching), else its step of the hard rules with its last full step's
+ * model verdicts. Each component's model verdicts are kept apart: every
+ * model rule belongs to one component, and a full step gives each of its
+ * rules a verdict, so the verdicts of the last step (mv_last) stand for
+ * the components not matched in this one. */
+static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[], uint32_t model)
 {
   if ((d == NULL) || !d->initialised || (s == NULL)) {
     if ((d != NULL) && d->initialised) {
@@ -973,12 +973,15 @@ static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
     canfdi_count_inc(&d->diag.steps);
     flags = update_flags(d, s);
     update_channels(d, s);
-    v.m = model ? (canfdi_diagnosis_vmask_t){0U, 0U, 0U} : d->mv_last;
+    uint32_t c;
+    v.m = d->mv_last;
     hard_phase(d, s, flags, &v);
-    if (model) {
-      component_phase(d, &v);
-    } else {
-      hard_components(d, &v);
+    for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+      if (((model >> c) & 1U) != 0U) {
+        component_full(d, c, &v);
+      } else {
+        component_between(d, c, &v);
+      }
     }
     d->mv_last = v.m;
     corr_phase(d, &v);
@@ -988,12 +991,18 @@ static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
 
 void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
 {
-  diagnosis_step(d, s, report, true);
+  diagnosis_step(d, s, report, CANFDI_DIAG_ALL_COMP);
 }
 
 void canfdi_diagnosis_step_hard(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[])
 {
-  diagnosis_step(d, s, report, false);
+  diagnosis_step(d, s, report, 0U);
+}
+
+void canfdi_diagnosis_step_comp(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[],
+                                uint32_t components)
+{
+  diagnosis_step(d, s, report, components & CANFDI_DIAG_ALL_COMP);
 }
 
 uint8_t canfdi_diagnosis_isolated(const canfdi_diagnosis_t *d, uint8_t component, uint8_t *confidence_pct)

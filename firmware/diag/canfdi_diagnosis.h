@@ -242,6 +242,8 @@
 #define CANFDI_DIAG_REPORT_NONE ((int8_t)0)
 
 #define CANFDI_DIAG_N_COMP 2U   /* [0] DC motor, [1] throttle */
+/* Every component's bit (canfdi_diagnosis_step_comp). */
+#define CANFDI_DIAG_ALL_COMP ((1U << CANFDI_DIAG_N_COMP) - 1U)
 #define CANFDI_DIAG_N_CH 10U    /* symptom channels per component */
 #define CANFDI_DIAG_N_FLAGS 11U /* flag bits 0..10 of canfdi_symptoms_t.flags */
 
@@ -465,6 +467,18 @@ void canfdi_diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
  * persistence, the hard rules and the report, without the matching.
  */
 void canfdi_diagnosis_step_hard(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[]);
+
+/*
+ * A step that is full for the components in the bit mask `components` (bit
+ * c: component c, CANFDI_DIAG_COMP_DCM / _THR; other bits ignored) and a
+ * step of the hard rules for the others: each component's matching,
+ * result, isolation count and model verdicts are its own, so the
+ * application can match the two components in different steps of its
+ * rate schedule and spread the matching's cost. CANFDI_DIAG_ALL_COMP is
+ * canfdi_diagnosis_step, 0 canfdi_diagnosis_step_hard (the same bits).
+ */
+void canfdi_diagnosis_step_comp(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, int8_t report[],
+                                uint32_t components);
 
 /*
  * The fault isolated now in `component` (CANFDI_COMPONENT_DC_MOTOR or

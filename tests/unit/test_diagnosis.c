@@ -337,6 +337,117 @@ START_TEST(test_hard_between_full_steps)
 }
 END_TEST
 
+/* The component each fault of the diagnosis belongs to (its model and hard
+ * rules); CANFDI_DIAG_N_COMP for a fault it has no rule for. */
+static void fault_components(uint8_t comp[CANFDI_FAULT_COUNT])
+{
+  uint32_t i;
+  memset(comp, (int)CANFDI_DIAG_N_COMP, CANFDI_FAULT_COUNT);
+  for (i = 0U; i < CANFDI_DIAG_N_RULES; i++) {
+    comp[canfdi_diag_model_rules[i].fault] = canfdi_diag_model_rules[i].comp;
+  }
+  for (i = 0U; i < CANFDI_DIAG_N_HARD_RULES; i++) {
+    comp[canfdi_diag_hard_rules[i].fault] = canfdi_diag_hard_rules[i].comp;
+  }
+}
+
+/* Each component's step apart (canfdi_diagnosis_step_comp): with the DC
+ * motor matched in slot 0 and the throttle in slot 4 of ten (the
+ * application's schedule), every DC-motor result and report entry is the
+ * one full steps in slot 0 give, and every throttle one (P2135's input
+ * too) the one full steps in slot 4 give, at every step: for a fault in
+ * each plant (each DC-motor vector with a quarter of the throttle vectors,
+ * the two starting and ending apart, one intermittent, with noise). A mask of both
+ * is canfdi_diagnosis_step, of none canfdi_diagnosis_step_hard. */
+START_TEST(test_components_matched_apart)
+{
+  static canfdi_diagnosis_t split;
+  static canfdi_diagnosis_t at0;
+  static canfdi_diagnosis_t at4;
+  static canfdi_diagnosis_t full;
+  static canfdi_diagnosis_t both;
+  int8_t r_split[CANFDI_FAULT_COUNT];
+  int8_t r0[CANFDI_FAULT_COUNT];
+  int8_t r4[CANFDI_FAULT_COUNT];
+  int8_t r_full[CANFDI_FAULT_COUNT];
+  int8_t r_both[CANFDI_FAULT_COUNT];
+  uint8_t comp[CANFDI_FAULT_COUNT];
+  uint32_t a;
+  uint32_t b;
+  uint32_t pairs = 0U;
+  uint32_t found_dcm = 0U;
+  uint32_t found_thr = 0U;
+  fault_components(comp);
+  setup_sched();
+  for (a = 0U; a < N_VECS; a++) {
+    for (b = 0U; b < N_VECS; b++) {
+      uint32_t k;
+      bool seen_dcm = false;
+      bool seen_thr = false;
+      if ((vecs[a].component != DCM) || (vecs[b].component != THR) || (((a + b) % 4U) != 0U)) {
+        continue; /* a quarter of the pairs: every vector of each plant with a quarter of the other's */
+      }
+      pairs++;
+      ck_assert_int_eq(canfdi_diagnosis_init(&split, &cfg), CANFDI_OK);
+      ck_assert_int_eq(canfdi_diagnosis_init(&at0, &cfg), CANFDI_OK);
+      ck_assert_int_eq(canfdi_diagnosis_init(&at4, &cfg), CANFDI_OK);
+      ck_assert_int_eq(canfdi_diagnosis_init(&full, &cfg), CANFDI_OK);
+      ck_assert_int_eq(canfdi_diagnosis_init(&both, &cfg), CANFDI_OK);
+      for (k = 0U; k < 900U; k++) {
+        const bool dcm_on = (k >= 200U) && (k < 700U) && (((k / 37U) % 4U) != 3U);
+        const bool thr_on = (k >= 333U) && (k < 800U);
+        canfdi_symptoms_t s;
+        canfdi_symptoms_t t;
+        uint32_t f;
+        uint32_t c;
+        build(&s, dcm_on ? &vecs[a] : &fault_free, 0.3, 0.002);
+        build(&t, thr_on ? &vecs[b] : &fault_free, 0.3, 0.002);
+        memcpy(s.thr_rn_q16, t.thr_rn_q16, sizeof(s.thr_rn_q16));
+        memcpy(s.thr_pdev_q16, t.thr_pdev_q16, sizeof(s.thr_pdev_q16));
+        s.thr_rn_valid = t.thr_rn_valid;
+        s.flags |= t.flags;
+        canfdi_diagnosis_step_comp(&split, &s, r_split,
+                                   (((k % 10U) == 0U) ? (1U << CANFDI_DIAG_COMP_DCM) : 0U) |
+                                       (((k % 10U) == 4U) ? (1U << CANFDI_DIAG_COMP_THR) : 0U));
+        if ((k % 10U) == 0U) {
+          canfdi_diagnosis_step(&at0, &s, r0);
+        } else {
+          canfdi_diagnosis_step_hard(&at0, &s, r0);
+        }
+        if ((k % 10U) == 4U) {
+          canfdi_diagnosis_step(&at4, &s, r4);
+        } else {
+          canfdi_diagnosis_step_hard(&at4, &s, r4);
+        }
+        canfdi_diagnosis_step(&full, &s, r_full);
+        canfdi_diagnosis_step_comp(&both, &s, r_both, CANFDI_DIAG_ALL_COMP | 0xF0U);
+        ck_assert_mem_eq(r_both, r_full, sizeof(r_full));
+        for (f = 0U; f < CANFDI_FAULT_COUNT; f++) {
+          const int8_t want = (comp[f] == CANFDI_DIAG_COMP_DCM) ? r0[f] : r4[f];
+          ck_assert_msg(r_split[f] == want, "%s + %s, step %u: fault %u reported %d, not %d", vecs[a].name,
+                        vecs[b].name, k, f, r_split[f], want);
+        }
+        for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
+          const canfdi_diagnosis_t *ref = (c == CANFDI_DIAG_COMP_DCM) ? &at0 : &at4;
+          const uint8_t cc = (c == CANFDI_DIAG_COMP_DCM) ? DCM : THR;
+          ck_assert_mem_eq(canfdi_diagnosis_result(&split, cc), canfdi_diagnosis_result(ref, cc),
+                           sizeof(canfdi_diagnosis_result_t));
+        }
+        ck_assert(canfdi_diagnosis_corr_not_isolated(&split) == canfdi_diagnosis_corr_not_isolated(&at4));
+        seen_dcm = seen_dcm || (r_split[vecs[a].fault] == CANFDI_DIAG_REPORT_FAILED);
+        seen_thr = seen_thr || (r_split[vecs[b].fault] == CANFDI_DIAG_REPORT_FAILED);
+      }
+      found_dcm += seen_dcm ? 1U : 0U;
+      found_thr += seen_thr ? 1U : 0U;
+    }
+  }
+  /* not a comparison of idle runs: both plants' faults were reported */
+  ck_assert_uint_ge(pairs, 50U);
+  ck_assert_msg((found_dcm * 2U > pairs) && (found_thr * 2U > pairs), "DC motor faults found in %u, throttle in %u of %u",
+                found_dcm, found_thr, pairs);
+}
+END_TEST
+
 /* Every non-communication fault id appears in the vector table. */
 START_TEST(test_catalogue_covered)
 {
@@ -1020,6 +1131,7 @@ static Suite *make_suite(void)
   tcase_add_test(tc, test_rearm_holds_one_component);
   tcase_add_loop_test(tc, test_isolates_each_fault_scheduled, 0, (int)N_VECS);
   tcase_add_test(tc, test_hard_between_full_steps);
+  tcase_add_test(tc, test_components_matched_apart);
   tcase_add_test(tc, test_gain_contra_rules_gain_out);
   tcase_add_test(tc, test_band_is_not_zero);
   suite_add_tcase(s, tc);
