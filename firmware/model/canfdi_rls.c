@@ -375,6 +375,9 @@ int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg)
       }
     }
     if (ok) {
+      for (i = 0U; i < CANFDI_RLS_N_U; i++) {
+        r->u[i] = 0; /* the columns beyond n too: a defined state */
+      }
       r->cfg = *cfg;
       r->inv_lambda = pf_recip(pf_make((uint32_t)((int64_t)2147483648LL - (int64_t)cfg->forget_q31), -31));
       r->trb_grow = pf_mul(r->inv_lambda, pf_make(0x80000800U, -31)); /* (1 + 2^-20) */
@@ -403,19 +406,32 @@ int32_t canfdi_rls_init(canfdi_rls_t *r, const canfdi_rls_cfg_t *cfg)
   return out;
 }
 
-/* P = p0 I: c0 = 1, D = p0, U = I (column exponents at their floor). */
+/* P = p0 I: c0 = 1, D = p0, U = I (column exponents at their floor; the
+ * entries of the n columns cleared, the others are never read and stay as
+ * canfdi_rls_init left them). The trace bound is the stored factors'
+ * trace, summed as rls_trace_stored sums it (the same bits): with U = I
+ * each column's term is d_j (d_j times the pf 1 is exact), so the sum is
+ * p0 added n - 1 times, without the squares (a covariance reset or boost
+ * costs about half as much). */
 static void rls_p0(canfdi_rls_t *r)
 {
+  const unsigned n = r->cfg.n_params;
+  const pf_t d0 = pf_make((uint32_t)r->cfg.p0_q16, -16);
+  const unsigned nu = u_base(n);
+  pf_t tr = d0;
   unsigned i;
   r->c0 = pf_make(1U, 0);
   for (i = 0U; i < NMAX; i++) {
-    r->d[i] = (i < r->cfg.n_params) ? pf_make((uint32_t)r->cfg.p0_q16, -16) : PF_ZERO;
+    r->d[i] = (i < n) ? d0 : PF_ZERO;
     r->u_e[i] = (int16_t)U_EMIN;
   }
-  for (i = 0U; i < CANFDI_RLS_N_U; i++) {
+  for (i = 0U; i < nu; i++) {
     r->u[i] = 0;
   }
-  r->trb = rls_trace_stored(r);
+  for (i = 1U; i < n; i++) {
+    tr = pf_add(tr, d0);
+  }
+  r->trb = tr;
 }
 
 void canfdi_rls_reset(canfdi_rls_t *r, bool keep_theta)
