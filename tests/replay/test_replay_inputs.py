@@ -500,7 +500,8 @@ def test_a_last_line_cut_anywhere_is_reported(suffix: str, tmp_path: Path) -> No
     last_no = whole[-1][0]  # the last frame's line (an ASC trailer follows it)
     end = sum(len(ln) for ln in data.splitlines(keepends=True)[:last_no - 1])
     stop = data.find(b"\n", end)
-    for at in range(end, stop):
+    whole_at = stop - 1 if data[stop - 1:stop] == b"\r" else stop  # the line's text ends here (CR LF or LF)
+    for at in range(end, stop + 1):  # from whole_at on: the whole line without its line end
         if not data[end:at].strip():
             continue  # only the line's leading blanks: a whole file of five frames
         cut = tmp_path / f"cut{suffix}"
@@ -509,7 +510,29 @@ def test_a_last_line_cut_anywhere_is_reported(suffix: str, tmp_path: Path) -> No
         out = io.StringIO()
         n = write_candump(numbered_messages(cut, suffix[1:], problems), out, cut, problems, suffix[1:])
         lines = [p[1] for p in problems.items]
-        if n == 6:  # cut after the data bytes (ASC's trailing columns): the whole frame, no word
-            assert not lines and out.getvalue().splitlines()[-1].endswith(whole[-1][1].hex().upper()), (at, out)
+        if at >= whole_at:  # a whole last line without a line end (some tools write none): read
+            assert n == 6 and not lines, (problems.items, out.getvalue())
+            assert out.getvalue().splitlines()[-1].endswith(whole[-1][1].hex().upper()), out.getvalue()
         else:
             assert n == 5 and lines == [last_no], (at, data[end:at], problems.items)
+
+
+def test_last_lines_without_a_line_end(tmp_path: Path) -> None:
+    """ASC in decimal bytes: a last frame line without a line end may end inside its last byte
+    ("255" cut to "25" is a whole byte): reported, its frame not used. An event line at the end
+    without a line end holds no frame by design: nothing reported."""
+    from canfdi.replay_input import Problems, numbered_messages, write_candump
+
+    head = ("date Sun Nov 29 20:00:00.000 2026\nbase dec  timestamps absolute\ninternal events logged\n"
+            "Begin Triggerblock Sun Nov 29 20:00:00.000 2026\n 0.000000 Start of measurement\n")
+    rows = "".join(f" {0.01 * (i + 1):.6f} 1  256             Rx   d 8 1 2 3 4 5 6 7 255\n" for i in range(4))
+    cases = [(" 0.050000 1  256             Rx   d 8 1 2 3 4 5 6 7 25", 4, [6 + 4]),
+             (" 0.050000 1  256             Rx   d 8 1 2 3 4 5 6 7", 4, [6 + 4]),
+             (" 0.050000 Start of measurement", 4, []),
+             ("End TriggerBlock", 4, [])]
+    for last, frames, bad in cases:
+        f = tmp_path / "dec.asc"
+        f.write_text(head + rows + last)
+        problems = Problems()
+        n = write_candump(numbered_messages(f, "asc", problems), io.StringIO(), f, problems, "asc")
+        assert (n, [p[1] for p in problems.items]) == (frames, bad), (last, problems.items)

@@ -179,33 +179,46 @@ def _frame_expected(fmt: str, line: str, n: int) -> bool:
     return n > 1                     # csv: the header line
 
 
-def _cut_line(fmt: str, line: str) -> bool:
-    """The file ends inside this line: no line end, and not a line that holds no frame by design.
-    Such a last line may be whole (some tools write no line end after the last line) or cut: an
-    ASC line cut after its time stamp or identifier reads as an event line (no frame, no word),
-    so one that gives no frame is reported; one that gives a frame is checked by _cut_in_a_byte."""
-    if line.endswith("\n"):
-        return False
-    s = line.strip()
-    if not s:
-        return False
-    if fmt == "asc":
-        return not _ASC_NOT_A_FRAME.match(s)
-    if fmt == "trc":
-        return not s.startswith(";")
-    return True
+#: An ASC frame line cut after its time stamp, channel, identifier or a part of its direction:
+#: it reads as an event line (no frame, no word) to python-can's ASC reader.
+_ASC_CUT_FRAME = re.compile(r"\d+\.\d+(\s+\d+(\s+[0-9A-Fa-f]+x?(\s+[RT]x?)?)?)?", re.ASCII)
 
 
-def _cut_in_a_byte(line: str, msg: can.Message) -> bool:
-    """A frame read from a last line without line end whose last column is one hex digit, the
-    value of its last data byte: the line was cut inside that byte ("0C" cut to "0" reads as 0x00,
-    a whole frame with a wrong byte; a cut between bytes gives too few bytes, see short_data)."""
+def _cut_line(fmt: str, line: str, n: int) -> bool:
+    """The file ends inside this line: no line end after a line that should hold a frame (some
+    tools write no line end after the last line, so a whole line is judged by what it gave: a
+    frame line that gives no frame was cut; one that gives a frame, see _cut_in_a_byte). An ASC
+    frame line cut after its time stamp, channel or identifier counts too: the reader takes it
+    for an event line. An event, status, comment or header line at the end is not reported."""
+    if line.endswith("\n") or not line.strip():
+        return False
+    return _frame_expected(fmt, line, n) or (fmt == "asc" and bool(_ASC_CUT_FRAME.fullmatch(line.strip())))
+
+
+def _cut_in_a_byte(fmt: str, line: str, msg: can.Message, base: str) -> bool:
+    """A classic data frame read from a last line without a line end that may end inside its last
+    data byte, which python-can reads as a whole byte with a wrong value ("0C" cut to "0" is
+    0x00); a cut between bytes gives too few bytes (short_data). The last data byte ends the line
+    in TRC and in ASC unless ASC's trailing columns ("Length = ...") follow; a hex byte is two
+    digits, a decimal one ("base dec") one to three, so there a line that ends in a byte cannot
+    be told from a cut one. CAN FD, remote and error frames are not the supervisor's input."""
+    if (fmt not in ("asc", "trc") or msg.is_fd or msg.is_remote_frame or msg.is_error_frame
+            or len(msg.data) == 0):
+        return False
     cols = line.split()
-    return (bool(cols) and len(cols[-1]) == 1 and len(msg.data) > 0
-            and cols[-1] in "0123456789abcdefABCDEF" and int(cols[-1], 16) == msg.data[-1])
+    dec = fmt == "asc" and base.lower().startswith("dec")
+    try:
+        last = int(cols[-1], 10 if dec else 16)
+    except ValueError:
+        return False  # the line ends in another column (ASC's "Length = ..."): its data are whole
+    if last != msg.data[-1] or (fmt == "asc" and "Length" in cols):
+        return False
+    return dec or len(cols[-1]) < 2
 
 
 _CUT_WHY = "the file ends inside this line (no line end): the log is cut here; no frame is read from it"
+_CUT_BYTE_WHY = ("the file ends inside this line (no line end), maybe inside its last data byte: the log is cut "
+                 "here; its frame is not used")
 
 _SKIPPED_WHY = {
     "asc": "python-can's ASCReader reads no frame from this line; skipped",
@@ -233,17 +246,18 @@ class _CountingLines:
         self.pending_text = ""
         self.pending_why = ""
         self.last = ""
-        self.cut = False  # the current line is the file's last and has no line end
+        self.cut = False  # the current line has no line end (the file's last)
 
     def _seen(self, line: str) -> None:
         self.flush()
         self.n += 1
         self.last = line
-        self.cut = _cut_line(self.fmt, line)
-        if self.cut or _frame_expected(self.fmt, line, self.n):
+        self.cut = not line.endswith("\n")
+        cut = _cut_line(self.fmt, line, self.n)
+        if cut or _frame_expected(self.fmt, line, self.n):
             self.pending = self.n
             self.pending_text = line
-            self.pending_why = _CUT_WHY if self.cut else _SKIPPED_WHY[self.fmt]
+            self.pending_why = _CUT_WHY if cut else _SKIPPED_WHY[self.fmt]
 
     def flush(self) -> None:
         if self.pending:
@@ -346,8 +360,10 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
         while True:
             try:
                 for msg in reader:
-                    if lines.cut and _cut_in_a_byte(lines.last, msg):
-                        lines.flush()  # a frame with a wrong last byte: reported, not used
+                    if lines.cut and _cut_in_a_byte(fmt, lines.last, msg, str(getattr(reader, "base", "hex"))):
+                        lines.pending_why = _CUT_BYTE_WHY
+                        lines.pending, lines.pending_text = lines.n, lines.last
+                        lines.flush()  # a frame that may have a wrong last byte: reported, not used
                         continue
                     lines.gave_frame()
                     yield lines.n, msg
