@@ -23,6 +23,7 @@ void canfdi_app_out_init(canfdi_app_out_t *o, const canfdi_dtc_t *dtc)
   }
   o->dtc_changes_seen = dtc->changes;
   o->dtc_behind = false;
+  o->dtc_next = 0U;
   o->n_stored = (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TFSLC);
   o->n_failed = (uint8_t)canfdi_dtc_count_by_mask(dtc, (uint8_t)CANFDI_DTC_ST_TF);
   o->rr_frames = 0U;
@@ -50,6 +51,8 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
     uint32_t changed = 0U;
     uint32_t stored = 0U;
     uint32_t failed = 0U;
+    uint32_t part[2];
+    uint32_t p;
     uint32_t j;
     for (j = 0U; j < (uint32_t)dtc->n_dtcs; j++) {
       const uint8_t s = canfdi_dtc_status_at(dtc, (uint8_t)j); /* j < n_dtcs */
@@ -61,24 +64,34 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
     o->n_stored = (uint8_t)stored; /* <= n_dtcs */
     o->n_failed = (uint8_t)failed;
     o->dtc_behind = false;
-    while (changed != 0U) {
-      canfdi_tx_dtc_t ev;
-      j = (uint32_t)canfdi_ctz32(changed);
-      changed &= changed - 1U;
-      ev.dtc = dtc->table[j].dtc;
-      ev.status = canfdi_dtc_status_at(dtc, (uint8_t)j);
-      ev.occurrence = canfdi_dtc_occurrence(dtc, (uint8_t)j);
-      ev.index = (uint8_t)j;
-      ev.count = o->n_stored;
-      if (canfdi_tx_dtc_event(tx, &ev) == CANFDI_OK) {
-        canfdi_count_inc(&o->diag.dtc_events);
-        o->dtc_status_sent[j] = ev.status;
-      } else {
-        /* the queue is full (it sends one a step): this change and the
-         * rest stay unsent and are looked for again next step */
-        canfdi_count_inc(&o->diag.dtc_queue_full);
-        o->dtc_behind = true;
-        changed = 0U;
+    /* round robin: the changes from dtc_next on, then those below it
+     * (dtc_next < n_dtcs <= 32) */
+    part[0] = changed & ~((UINT32_C(1) << o->dtc_next) - 1U);
+    part[1] = changed & ~part[0];
+    for (p = 0U; (p < 2U) && !o->dtc_behind; p++) {
+      uint32_t m = part[p];
+      while (m != 0U) {
+        canfdi_tx_dtc_t ev;
+        j = (uint32_t)canfdi_ctz32(m);
+        m &= m - 1U;
+        ev.dtc = dtc->table[j].dtc;
+        ev.status = canfdi_dtc_status_at(dtc, (uint8_t)j);
+        ev.occurrence = canfdi_dtc_occurrence(dtc, (uint8_t)j);
+        ev.index = (uint8_t)j;
+        ev.count = o->n_stored;
+        if (canfdi_tx_dtc_event(tx, &ev) == CANFDI_OK) {
+          canfdi_count_inc(&o->diag.dtc_events);
+          o->dtc_status_sent[j] = ev.status;
+          o->dtc_next = (uint8_t)(((j + 1U) < (uint32_t)dtc->n_dtcs) ? (j + 1U) : 0U);
+        } else {
+          /* the queue is full (it sends one a step): this change and the
+           * rest stay unsent and are looked for again next step, from
+           * this one on */
+          canfdi_count_inc(&o->diag.dtc_queue_full);
+          o->dtc_behind = true;
+          o->dtc_next = (uint8_t)j;
+          m = 0U;
+        }
       }
     }
   }

@@ -81,6 +81,10 @@ typedef struct {
   uint8_t n_stored;            /* codes with TFSLC, as of dtc_changes_seen */
   uint8_t n_failed;            /* codes with TF, as of dtc_changes_seen */
   bool dtc_behind;             /* changes waiting for room in the queue */
+  uint8_t dtc_next;            /* the look for changes starts at this DTC
+                                * index (one after the last queued): a
+                                * code that keeps changing cannot hold back
+                                * the others while the queue is full */
   uint32_t rr_frames;          /* cyclic EcuDtc frames composed (wraps by intent) */
   uint32_t step_time_max_us;   /* port timing since the last EcuStatus */
   uint32_t cycle_time_max_us;

@@ -182,6 +182,42 @@ START_TEST(test_dtc_burst_not_lost)
 }
 END_TEST
 
+/* While the queue is full, a code that changes in every step does not
+ * hold back the others: its changes and theirs go out in turn (round
+ * robin from one after the last queued), each waiting change within a
+ * pass over the codes. */
+START_TEST(test_dtc_changes_take_turns)
+{
+  seen_t s;
+  const unsigned n = 12U;
+  unsigned i;
+  unsigned k;
+  unsigned flaps = 0U;
+  bool seen_last = false;
+  setup();
+  run(10U, &s);
+  for (i = 0U; i < n; i++) {
+    fail_code(dtc.table[i].dtc);
+  }
+  /* code 0 changes every step (failed, passed, failed, ...) while the
+   * burst waits: before, the lowest index was looked at first every step */
+  for (k = 0U; k < 40U; k++) {
+    if ((k % 2U) == 0U) {
+      pass_code(dtc.table[0].dtc);
+    } else {
+      fail_code(dtc.table[0].dtc);
+    }
+    run(1U, &s);
+    for (i = 0U; i < s.n_change; i++) {
+      flaps += (s.change[i] == dtc.table[0].dtc) ? 1U : 0U;
+      seen_last = seen_last || (s.change[i] == dtc.table[n - 1U].dtc);
+    }
+  }
+  ck_assert_msg(seen_last, "the last code of the burst never went out in 40 steps");
+  ck_assert_uint_ge(flaps, 2U); /* the flapping code goes out too */
+}
+END_TEST
+
 /* A memory loaded before the first step is announced; the composer
  * initialised after the load would not. */
 START_TEST(test_loaded_memory_announced)
@@ -218,6 +254,7 @@ static Suite *make_suite(void)
   TCase *tc = tcase_create("frames");
   tcase_add_test(tc, test_dtc_frames);
   tcase_add_test(tc, test_dtc_burst_not_lost);
+  tcase_add_test(tc, test_dtc_changes_take_turns);
   tcase_add_test(tc, test_loaded_memory_announced);
   tcase_add_test(tc, test_port_timing);
   suite_add_tcase(s, tc);
