@@ -559,9 +559,16 @@ int32_t canfdi_app_step(canfdi_app_t *app, uint32_t now_us, canfdi_tx_frame_t *o
     /* 6. each component's model rules matched in its slot of the rate
      * schedule (canfdi_app.h); the hard rules in every step, a
      * component's model verdicts held between its full steps */
-    canfdi_diagnosis_step_comp(&app->diagnosis, &app->sym, NULL,
-                               ((app->slot == CANFDI_APP_SLOT_DIAG) ? (1U << CANFDI_DIAG_COMP_DCM) : 0U) |
-                                   ((app->slot == app->slot_diag_thr) ? (1U << CANFDI_DIAG_COMP_THR) : 0U));
+    {
+      uint32_t matched = 0U;
+      if (app->slot == CANFDI_APP_SLOT_DIAG) {
+        matched |= (uint32_t)1U << CANFDI_DIAG_COMP_DCM;
+      }
+      if (app->slot == app->slot_diag_thr) {
+        matched |= (uint32_t)1U << CANFDI_DIAG_COMP_THR;
+      }
+      canfdi_diagnosis_step_comp(&app->diagnosis, &app->sym, NULL, matched);
+    }
     stage_dtc(app);                    /* 7. */
     stage_manage(app, u_dcm, u_thr);   /* 8. */
     update_feedback(app);

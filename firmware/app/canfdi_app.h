@@ -200,18 +200,19 @@
 #define CANFDI_APP_MAX_TX (CANFDI_TX_MAX_FRAMES_PER_STEP + 1U)
 
 /* The rate schedule's frame: CANFDI_APP_FRAME_SLOTS 1 ms steps (10 ms);
- * the diagnosis and the DTC bookkeeping run in slot CANFDI_APP_SLOT_DIAG of
- * every cal.diag_period_steps (see the header, rate schedule). */
+ * the DC motor's model rules are matched in slot CANFDI_APP_SLOT_DIAG of
+ * every cal.diag_period_steps, the throttle's in a slot of its own (below;
+ * see the header, rate schedule). */
 #define CANFDI_APP_FRAME_SLOTS 10U
 #define CANFDI_APP_SLOT_DIAG 0U
 /* The model rules are matched per component (canfdi_diagnosis_step_comp):
- * the DC motor's in slot CANFDI_APP_SLOT_DIAG, the throttle's in slot
- * diag_period_steps * 2 / 5 (4 at the default period of 10, a slot with
- * the throttle's cheaper electrical update only: never with the DC motor's
- * updates or the throttle's mechanical one; 0 at periods 1 and 2, where both
- * share slot 0). One matching costs about 1 400 instructions on the M4
- * with symptoms present (`make bench-pil-profile`): split, neither slot
- * carries both. */
+ * the DC motor's in slot CANFDI_APP_SLOT_DIAG, the throttle's in the first
+ * slot from diag_period_steps * 2 / 5 on that holds no update of a locked
+ * estimator but the throttle's cheaper electrical one (4 at the default
+ * period of 10; 2, 3 and 4 at periods 4, 5 and 8; slot 0, shared with the
+ * DC motor's, at periods 1 and 2, where no other slot is free). One
+ * matching costs about 1 400 instructions on the M4 with symptoms present
+ * (`make bench-pil-profile`): split, neither slot carries both. */
 #define CANFDI_APP_SLOT_DIAG_THR_NUM 2U
 #define CANFDI_APP_SLOT_DIAG_THR_DEN 5U
 /* The estimators' RLS updates on fixed slots (canfdi_est_thr_align,
@@ -359,7 +360,7 @@ typedef struct {
   uint8_t slot;         /* this step's slot: steps since power-up modulo
                          * cal.diag_period_steps */
   uint8_t slot_diag_thr; /* the throttle's matching slot for this period
-                          * (CANFDI_APP_SLOT_DIAG_THR) */
+                          * (CANFDI_APP_SLOT_DIAG_THR_NUM) */
   uint8_t est_k[2];     /* the DC motor's (0) and the throttle's (1)
                          * estimator: this step's step of its schedule,
                          * modulo its decim (CANFDI_APP_EST_UNLOCKED: it

@@ -35,6 +35,31 @@ static uint8_t est_k0(uint32_t period, uint32_t decim, uint32_t offset)
   return k;
 }
 
+/* The throttle's matching slot (canfdi_app.h, CANFDI_APP_SLOT_DIAG_THR_*):
+ * from period * 2 / 5 on, the first slot that is not the DC motor's
+ * matching slot and holds no update of a locked estimator (the DC
+ * motor's two, the throttle's other than its electrical one); the DC
+ * motor's slot when there is none (periods 1 and 2). */
+static uint8_t thr_match_slot(uint32_t period, uint32_t dcm_decim, uint32_t thr_decim)
+{
+  const uint32_t s0 = (period * CANFDI_APP_SLOT_DIAG_THR_NUM) / CANFDI_APP_SLOT_DIAG_THR_DEN;
+  const bool dcm_locked = ((period % dcm_decim) == 0U);
+  const bool thr_locked = ((period % thr_decim) == 0U);
+  uint8_t slot = (uint8_t)CANFDI_APP_SLOT_DIAG;
+  uint32_t i;
+  for (i = 0U; (i < period) && (slot == (uint8_t)CANFDI_APP_SLOT_DIAG); i++) {
+    const uint32_t s = (s0 + i) % period;
+    const uint32_t kd = s % dcm_decim;
+    const bool dcm_busy = dcm_locked && ((kd == (CANFDI_APP_SLOT_EST_DCM % dcm_decim)) ||
+                                         (kd == ((CANFDI_APP_SLOT_EST_DCM + 1U) % dcm_decim)));
+    const bool thr_busy = thr_locked && ((s % thr_decim) != (CANFDI_APP_SLOT_EST_THR % thr_decim));
+    if ((s != CANFDI_APP_SLOT_DIAG) && !dcm_busy && !thr_busy) {
+      slot = (uint8_t)s;
+    }
+  }
+  return slot;
+}
+
 static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
 {
   canfdi_app_cal_t *c = &app->cal;
@@ -47,7 +72,6 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
     dc.isolate_steps = per_period(dc.isolate_steps, period);
   }
   app->slot = 0U;
-  app->slot_diag_thr = (uint8_t)(((uint32_t)period * CANFDI_APP_SLOT_DIAG_THR_NUM) / CANFDI_APP_SLOT_DIAG_THR_DEN);
   if ((rc == CANFDI_OK) && ((canfdi_rx_init(&app->rx, &c->rx, now_us) != CANFDI_OK) || (canfdi_tx_init(&app->tx) != CANFDI_OK) ||
       (canfdi_ctrl_dcm_init(&app->ctrl_dcm, &c->ctrl_dcm) != CANFDI_OK) ||
       (canfdi_ctrl_thr_init(&app->ctrl_thr, &c->ctrl_thr) != CANFDI_OK) ||
@@ -74,6 +98,7 @@ static int32_t init_modules(canfdi_app_t *app, uint32_t now_us)
   if (rc == CANFDI_OK) {
     app->est_k[0] = est_k0(period, app->est_dcm.cfg.decim, CANFDI_APP_SLOT_EST_DCM);
     app->est_k[1] = est_k0(period, app->est_thr.cfg.decim, CANFDI_APP_SLOT_EST_THR);
+    app->slot_diag_thr = thr_match_slot(period, app->est_dcm.cfg.decim, app->est_thr.cfg.decim);
   }
   return rc;
 }

@@ -936,6 +936,7 @@ static void guard_diagnosis(void)
   sym.flags = in_u32;
   sym.dcm_ua_cmd_rn_q16 = in_s32[1];
   canfdi_diagnosis_step(&dg, &sym, rep);
+  canfdi_diagnosis_step_hard(&dg, &sym, rep);
   sinku64((uint64_t)canfdi_diagnosis_isolated(&dg, CANFDI_COMPONENT_DC_MOTOR, &conf) + conf);
   res = canfdi_diagnosis_result(&dg, CANFDI_COMPONENT_THROTTLE);
   sinku64((uint64_t)((res != NULL) ? res->best : 0U));

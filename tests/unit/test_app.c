@@ -35,6 +35,34 @@ START_TEST(test_init_args)
 }
 END_TEST
 
+/* The throttle's matching slot per diag_period_steps (canfdi_app.h): the
+ * first from period * 2 / 5 on that is not the DC motor's and holds no
+ * update of a locked estimator (the DC motor's two of every five, on
+ * slots 1 and 2 of five; the throttle's mechanical one, on the odd
+ * slots), else the DC motor's slot 0. */
+START_TEST(test_matching_slots)
+{
+  static const uint8_t want[11] = {0U, 0U, 0U, 1U, 2U, 3U, 2U, 2U, 4U, 3U, 4U};
+  uint8_t p;
+  for (p = 1U; p <= CANFDI_APP_FRAME_SLOTS; p++) {
+    const uint8_t dd = 5U;
+    const uint8_t dt = 2U;
+    const uint8_t s = want[p];
+    canfdi_app_default_cal(&cal);
+    ck_assert_uint_eq(cal.est_dcm.decim, dd);
+    ck_assert_uint_eq(cal.est_thr.decim, dt);
+    cal.diag_period_steps = p;
+    ck_assert_int_eq(canfdi_app_init(&app, &cal, 0U), CANFDI_OK);
+    ck_assert_msg(app.slot_diag_thr == s, "period %u: slot %u, not %u", p, app.slot_diag_thr, s);
+    ck_assert_uint_lt(s, p);
+    if (s != CANFDI_APP_SLOT_DIAG) {
+      ck_assert_msg(((p % dt) != 0U) || ((s % dt) == 0U), "period %u: the throttle's mechanical update", p);
+      ck_assert_msg(((p % dd) != 0U) || (((s % dd) != 1U) && ((s % dd) != 2U)), "period %u: the DC motor's", p);
+    }
+  }
+}
+END_TEST
+
 /* Per step: the two actuator frames first; the slow frames at their DBC
  * periods (EcuStatus 100 ms, EcuResidualDcm 10 ms), never more than
  * CANFDI_APP_MAX_TX frames. */
@@ -329,6 +357,7 @@ static Suite *make_suite(void)
   Suite *s = suite_create("app");
   TCase *tc = tcase_create("ports");
   tcase_add_test(tc, test_init_args);
+  tcase_add_test(tc, test_matching_slots);
   tcase_add_test(tc, test_output_schedule);
   suite_add_tcase(s, tc);
   tc = tcase_create("supervision");
