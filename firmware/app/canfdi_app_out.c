@@ -82,7 +82,10 @@ static void queue_changes(canfdi_app_out_t *o, canfdi_tx_t *tx, const canfdi_dtc
         if (canfdi_tx_dtc_event(tx, &ev) == CANFDI_OK) {
           canfdi_count_inc(&o->diag.dtc_events);
           o->dtc_status_sent[j] = ev.status;
-          o->dtc_next = (uint8_t)(((j + 1U) < (uint32_t)dtc->n_dtcs) ? (j + 1U) : 0U);
+          o->dtc_next = 0U;
+          if ((j + 1U) < (uint32_t)dtc->n_dtcs) {
+            o->dtc_next = (uint8_t)(j + 1U); /* < 32 */
+          }
         } else {
           /* the queue is full (it sends one a step): this change and the
            * rest stay unsent and are looked for again next step, from
