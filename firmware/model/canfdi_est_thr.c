@@ -46,10 +46,15 @@ void canfdi_est_thr_default_cfg(canfdi_est_thr_cfg_t *cfg)
   cfg->fast_pair_steps = 300U;
 }
 
-/* EW mean m += (x - m) 2^-shift, Q32; rounded, saturating. */
+/* EW mean m += (x - m) 2^-shift, Q32; rounded. Scaling and overflow: the
+ * fast test's products are squares in [0, 2^62] or below 2^52 in
+ * magnitude (|c|, |r| <= 16 N m, clamped in fast_update; s any int32_t),
+ * and so is each mean (a convex combination of them, rounded), so x - m
+ * and the sum stay inside int64_t: no saturation can act, and none is
+ * paid for (five of these every mechanical update). */
 static int64_t ew_q32(int64_t m, int64_t x, unsigned shift)
 {
-  return canfdi_add_s64_sat(m, canfdi_asr64_rnd(canfdi_sub_s64_sat(x, m), shift));
+  return m + canfdi_asr64_rnd(x - m, shift);
 }
 
 /* One update of the fast structured test on the SVF outputs (header). */

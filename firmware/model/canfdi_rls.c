@@ -283,13 +283,16 @@ static inline __attribute__((always_inline)) int32_t asr_rnd(int32_t x, unsigned
   return asr_k(x, k) + (int32_t)(((uint32_t)x >> (k - 1U)) & 1U);
 }
 
-/* v[0..n-1] *= 2^-k with rounding (k >= 1; k > 31 clears). Scaling: the
- * block's exponent rises by k; the caller adds it. */
+/* v[0..n-1] *= 2^-k with rounding (k >= 1; k > 31 clears: |v| < 2^31
+ * rounds to 0, as canfdi_asr32_rnd gives). Scaling: the block's exponent
+ * rises by k; the caller adds it. The shift inline (asr_rnd): a block
+ * shifts in the updates after a covariance reset or boost, entry by
+ * entry. */
 static void blk_shr(int32_t v[], unsigned n, unsigned k)
 {
   unsigned i;
   for (i = 0U; i < n; i++) {
-    v[i] = canfdi_asr32_rnd(v[i], k);
+    v[i] = (k > 31U) ? 0 : asr_rnd(v[i], k);
   }
 }
 
@@ -703,7 +706,7 @@ static void rls_column(int32_t col[], unsigned j, int16_t *col_e, uint32_t hm, i
     ue += 1 - s;
     for (i = 0U; i < j; i++) {
       const int32_t uo = col[i];
-      const int32_t un = canfdi_mla_hi_rnd(canfdi_asr32_rnd(uo, sh), b[i], mm);
+      const int32_t un = canfdi_mla_hi_rnd((sh > 31U) ? 0 : asr_rnd(uo, sh), b[i], mm);
       col[i] = un;
       acc |= magbits(un);
       b[i] = canfdi_mla_hi_rnd(b[i], uo, gg);
