@@ -113,33 +113,35 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      15 338   16 886   21 233
- *   Cortex-M4 (an386)      15 339   16 890   21 238
- *   Cortex-M0 (microbit)   30 142   33 989   43 317
- * and at most 21 718 (M4) / 49 231 (M0) over the PIL scenarios. On the
- * M4 that is the model rules' matching while a fault is present and its
- * trouble code is stored (dcm_ia_offset step 3050); the step where the
- * first verdicts reach the trouble codes (step 2100 of every scenario)
- * and the step after a tester's ClearDiagnosticInformation (21 593) come
- * close: the DTC routing gives at most four verdicts a step
+ *   Cortex-M3 (an385)      15 373   16 917   20 652
+ *   Cortex-M4 (an386)      15 375   16 919   20 653
+ *   Cortex-M0 (microbit)   30 210   34 062   43 221
+ * and at most 21 281 (M4) / 48 288 (M0) over the PIL scenarios. On both
+ * that is a step with two RLS updates (the DC motor's and the throttle's
+ * mechanical one) as the throttle's estimator is made alert again after
+ * dcm_ia_offset's fault (step 3021; the M0's RLS arithmetic is three times
+ * the M4's); the step where the first verdicts reach the trouble codes
+ * (step 2100 of every scenario, 20 728 to 20 921 on the M4) and the DC
+ * motor's matching while its fault's code is stored come close: the DTC
+ * routing gives at most four verdicts a step
  * (CANFDI_DTCROUTE_VERDICTS_PER_STEP), so the twenty codes that are due
- * at once then are spread over five steps. On the M0 it is a step with two RLS updates while
- * dcm_ia_offset's fault is present (its RLS arithmetic is three times the
- * M4's). Where the instructions go, per module, per slot of the rate
- * schedule and in the costliest steps: `make bench-pil-profile`
+ * at once then are spread over five steps, and the two components'
+ * matchings have slots of their own (below). Where the instructions go,
+ * per module, per slot of the rate schedule and in the costliest steps:
+ * `make bench-pil-profile`
  * (tests/pil/pil_profile.py; its split is summarised in
  * docs/requirements.md, requirement 1). A 1 ms step needs a Cortex-M4 of
  * roughly 35 MHz or more with margin (the worst step at ~1.2 cycles per
- * instruction: 27 MHz for the whole millisecond); on a Cortex-M0 at
+ * instruction: 26 MHz for the whole millisecond); on a Cortex-M0 at
  * 48 MHz it does not fit (the M0 builds its 32x32->64 products from 16-bit
  * halves, core/canfdi_fixp.h, and runs ~2.1 times the M4's count).
  * Host (x86-64, gcc -O2, callgrind): `make sil-bench`. The same run shows
  * the ECU's frames bit-identical between the host build and the target
  * builds. With a tester's requests in flight (`make pil-test`, the SIL log
- * of tests/sil/scenarios/uds_workshop.scn): at most 19 900 (M4) / 39 500
+ * of tests/sil/scenarios/uds_workshop.scn): at most 18 800 (M4) / 39 500
  * (M0) in those steps; the clear's effect comes one step later (above).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 21 718 / 49 231,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 21 281 / 48 288,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
@@ -165,7 +167,7 @@
  * all of the application's RAM, static: 11 080 bytes on Cortex-M (740 of
  * them the diagnostic server, uds/canfdi_uds.h, 1 224 the calibration
  * copy); the application image's static RAM and worst-case stack per core
- * are `make footprint`'s (11 592 B and 1 976 B on the Cortex-M0). No heap.
+ * are `make footprint`'s (11 592 B and 2 000 B on the Cortex-M0). No heap.
  */
 #ifndef CANFDI_APP_H
 #define CANFDI_APP_H

@@ -133,8 +133,8 @@
  * Measured executed instructions per call (arm-none-eabi-gcc 12 -Os, QEMU
  * -icount, SysTick; `make bench-pil`: bench/bench_rls_pil.c, 2000 calls,
  * n = 4, four regressors uniform in [-1, 1), gate open): mean (max)
- * 1 269 (1 883) on Cortex-M3, 1 277 (1 892) on Cortex-M4,
- * 3 656 (5 023) on Cortex-M0; the textbook covariance RLS takes
+ * 1 268 (1 775) on Cortex-M3, 1 267 (1 776) on Cortex-M4,
+ * 3 642 (4 991) on Cortex-M0; the textbook covariance RLS takes
  * 4 963 in software float and 7 136 in software double on the
  * M3 and 358 on the M4F's FPU (the README's figures table; one run's
  * figures in $(BUILD)/bench/pil.json). The maxima are the rare paths: the
