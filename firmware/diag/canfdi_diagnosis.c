@@ -881,36 +881,29 @@ static void component_match(canfdi_diagnosis_t *d, uint32_t c, uint8_t prev_isol
   model_verdicts(c, V_NONE, res->isolated, v);
 }
 
-/* Phase 2 of a component whose model rules are matched in this step: hard
- * rule, quiet or matching. Every model rule of c gets its verdict here. */
-static void component_full(canfdi_diagnosis_t *d, uint32_t c, verdicts_t *v)
+/* Phase 2 of component c. full: its model rules are matched in this step
+ * (hard rule, quiet or matching; every model rule of c gets its verdict
+ * here). Otherwise, between its full steps: a fired hard rule clears it as
+ * in a full step (its model verdicts NONE until its next one), else it
+ * keeps its last full step's result and model verdicts. */
+static void component_phase(canfdi_diagnosis_t *d, uint32_t c, bool full, verdicts_t *v)
 {
   canfdi_diagnosis_result_t *res = &d->res[c];
   const uint8_t prev_isolated = res->isolated;
-  const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && vfailed(&v->h, prev_isolated);
-  observe(d, c);
-  res->detected = v->hard_any[c] || ((d->obs_pos | d->obs_neg) != 0U);
   if (v->hard_any[c]) {
-    component_hard(d, c, prev_hard, v);
-  } else if (!res->detected) {
-    component_quiet(d, c, v);
-  } else {
-    component_match(d, c, prev_isolated, v);
-  }
-}
-
-/* Phase 2 of a component between its full steps: one whose hard rule fires
- * is cleared as in a full step (its model verdicts NONE until its next
- * one); otherwise it keeps its last full step's result and model
- * verdicts. */
-static void component_between(canfdi_diagnosis_t *d, uint32_t c, verdicts_t *v)
-{
-  if (v->hard_any[c]) {
-    canfdi_diagnosis_result_t *res = &d->res[c];
-    const uint8_t prev_isolated = res->isolated;
     const bool prev_hard = (prev_isolated != 0U) && (res->confidence_pct == 100U) && vfailed(&v->h, prev_isolated);
     res->detected = true;
     component_hard(d, c, prev_hard, v);
+  } else if (full) {
+    observe(d, c);
+    res->detected = ((d->obs_pos | d->obs_neg) != 0U);
+    if (!res->detected) {
+      component_quiet(d, c, v);
+    } else {
+      component_match(d, c, prev_isolated, v);
+    }
+  } else {
+    /* between full steps: held */
   }
 }
 
@@ -970,18 +963,14 @@ static void diagnosis_step(canfdi_diagnosis_t *d, const canfdi_symptoms_t *s, in
   } else {
     verdicts_t v;
     uint32_t flags;
+    uint32_t c;
     canfdi_count_inc(&d->diag.steps);
     flags = update_flags(d, s);
     update_channels(d, s);
-    uint32_t c;
     v.m = d->mv_last;
     hard_phase(d, s, flags, &v);
     for (c = 0U; c < CANFDI_DIAG_N_COMP; c++) {
-      if (((model >> c) & 1U) != 0U) {
-        component_full(d, c, &v);
-      } else {
-        component_between(d, c, &v);
-      }
+      component_phase(d, c, ((model >> c) & 1U) != 0U, &v);
     }
     d->mv_last = v.m;
     corr_phase(d, &v);

@@ -292,7 +292,7 @@ static void blk_shr(int32_t v[], unsigned n, unsigned k)
 {
   unsigned i;
   for (i = 0U; i < n; i++) {
-    v[i] = (k > 31U) ? 0 : asr_rnd(v[i], k);
+    v[i] = (k < 32U) ? asr_rnd(v[i], k) : 0;
   }
 }
 

@@ -184,15 +184,15 @@ def _frame_expected(fmt: str, line: str, n: int) -> bool:
 _ASC_CUT_FRAME = re.compile(r"\d+\.\d+(\s+\d+(\s+[0-9A-Fa-f]+x?(\s+[RT]x?)?)?)?", re.ASCII)
 
 
-def _cut_line(fmt: str, line: str, n: int) -> bool:
-    """The file ends inside this line: no line end after a line that should hold a frame (some
-    tools write no line end after the last line, so a whole line is judged by what it gave: a
-    frame line that gives no frame was cut; one that gives a frame, see _cut_in_a_byte). An ASC
-    frame line cut after its time stamp, channel or identifier counts too: the reader takes it
-    for an event line. An event, status, comment or header line at the end is not reported."""
-    if line.endswith("\n") or not line.strip():
-        return False
-    return _frame_expected(fmt, line, n) or (fmt == "asc" and bool(_ASC_CUT_FRAME.fullmatch(line.strip())))
+def _cut_line(fmt: str, line: str, expected: bool) -> bool:
+    """The file ends inside this line (it has no line end; `expected`: _frame_expected's answer):
+    a line that should hold a frame (some tools write no line end after the last line, so a
+    whole line is judged by what it gave: a frame line that gives no frame was cut; one that
+    gives a frame, see _cut_in_a_byte). An ASC frame line cut after its time stamp, channel or
+    identifier counts too: the reader takes it for an event line. An event, status, comment or
+    header line at the end is not reported."""
+    s = line.strip()
+    return bool(s) and (expected or (fmt == "asc" and bool(_ASC_CUT_FRAME.fullmatch(s))))
 
 
 def _cut_in_a_byte(fmt: str, line: str, msg: can.Message, base: str) -> bool:
@@ -253,8 +253,9 @@ class _CountingLines:
         self.n += 1
         self.last = line
         self.cut = not line.endswith("\n")
-        cut = _cut_line(self.fmt, line, self.n)
-        if cut or _frame_expected(self.fmt, line, self.n):
+        expected = _frame_expected(self.fmt, line, self.n)
+        cut = self.cut and _cut_line(self.fmt, line, expected)
+        if cut or expected:
             self.pending = self.n
             self.pending_text = line
             self.pending_why = _CUT_WHY if cut else _SKIPPED_WHY[self.fmt]
@@ -263,6 +264,11 @@ class _CountingLines:
         if self.pending:
             self.skipped(self.pending, self.pending_why, self.pending_text)
             self.pending = 0
+
+    def report_frame(self, why: str) -> None:
+        """The current line gave a frame that is not used: reported with `why`."""
+        self.pending, self.pending_text, self.pending_why = self.n, self.last, why
+        self.flush()
 
     def gave_frame(self) -> None:
         if self.pending == self.n:
@@ -361,9 +367,7 @@ def _text_messages(path: Path, fmt: str, gz: bool, problems: Problems) -> Iterat
             try:
                 for msg in reader:
                     if lines.cut and _cut_in_a_byte(fmt, lines.last, msg, str(getattr(reader, "base", "hex"))):
-                        lines.pending_why = _CUT_BYTE_WHY
-                        lines.pending, lines.pending_text = lines.n, lines.last
-                        lines.flush()  # a frame that may have a wrong last byte: reported, not used
+                        lines.report_frame(_CUT_BYTE_WHY)  # its last byte may be wrong
                         continue
                     lines.gave_frame()
                     yield lines.n, msg
