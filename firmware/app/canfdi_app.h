@@ -113,15 +113,15 @@
  * -icount (SysTick), arm-none-eabi-gcc 12 -Os, `make bench-pil` (tests/pil;
  * build/bench/pil.json), the 24 000 steps of the SIL demo:
  *                          min      mean     max
- *   Cortex-M3 (an385)      15 373   16 917   20 652
- *   Cortex-M4 (an386)      15 375   16 919   20 653
- *   Cortex-M0 (microbit)   30 210   34 062   43 221
- * and at most 21 281 (M4) / 48 288 (M0) over the PIL scenarios. On both
+ *   Cortex-M3 (an385)      15 343   16 879   20 670
+ *   Cortex-M4 (an386)      15 343   16 881   20 667
+ *   Cortex-M0 (microbit)   30 180   34 019   43 222
+ * and at most 21 286 (M4) / 48 290 (M0) over the PIL scenarios. On both
  * that is a step with two RLS updates (the DC motor's and the throttle's
  * mechanical one) as the throttle's estimator is made alert again after
  * dcm_ia_offset's fault (step 3021; the M0's RLS arithmetic is three times
  * the M4's); the step where the first verdicts reach the trouble codes
- * (step 2100 of every scenario, 20 728 to 20 921 on the M4) and the DC
+ * (step 2100 of every scenario, 20 745 to 20 918 on the M4) and the DC
  * motor's matching while its fault's code is stored come close: the DTC
  * routing gives at most four verdicts a step
  * (CANFDI_DTCROUTE_VERDICTS_PER_STEP), so the twenty codes that are due
@@ -141,7 +141,7 @@
  * of tests/sil/scenarios/uds_workshop.scn): at most 18 800 (M4) / 39 500
  * (M0) in those steps; the clear's effect comes one step later (above).
  * Stated worst case, whatever the step receives: 38 000 instructions on
- * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 21 281 / 48 288,
+ * the M4, 85 000 on the M0 (the PIL scenarios' maxima, 21 286 / 48 290,
  * with margin). `make pil-cost` checks it on hostile input: the
  * fuzz_app_rx inputs (random frames, identifiers, lengths, E2E errors,
  * jittered steps) run on QEMU; rejected and implausible input costs less
